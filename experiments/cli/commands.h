@@ -1,0 +1,20 @@
+// Each subcommand lives in its own file and registers itself on the app.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <stdexcept>
+#include <string>
+
+namespace shimmer::cli {
+
+// Thrown by a subcommand for bad input; main prints "shimmer: error: <what>"
+// and exits with 2. Anything else that escapes exits with 1.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+void AddVariantsCommand(CLI::App& app);
+void AddNdfCommand(CLI::App& app);
+
+}  // namespace shimmer::cli

@@ -1,0 +1,6 @@
+// The shading core in dependency order. Kernels include this file; C++
+// includes it through shading_glsl.cpp.
+#include "common.glsl"
+#include "ndf.glsl"
+#include "ggx_rect.glsl"
+#include "variants.glsl"

@@ -1,0 +1,100 @@
+// The shading core seen from C++: the GLSL filter math of renderer/shading,
+// compiled for float and double, plus the variant catalogue.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace shimmer::shading {
+
+enum class Ndf { kGgx = 0, kBeckmann = 1 };
+
+std::optional<Ndf> ParseNdf(std::string_view name);
+std::string_view NdfName(Ndf ndf);
+
+template <class T>
+struct Footprint {
+  glm::vec<2, T> hpp{0};
+  glm::vec<2, T> dhpp_dx{0};
+  glm::vec<2, T> dhpp_dy{0};
+  glm::vec<3, T> n{0, 0, 1};
+  glm::vec<3, T> dn_dx{0};
+  glm::vec<3, T> dn_dy{0};
+  glm::vec<3, T> dng_dx{0};
+  glm::vec<3, T> dng_dy{0};
+};
+
+template <class T>
+struct Params {
+  T fp_max = 1;
+  T fp_min_cap = T(0.1);
+  T sigma2 = T(0.25);
+  T kappa = T(0.18);
+};
+
+template <class T>
+struct FilteredNdf {
+  T slope_density = 0;
+  T density = 0;
+  glm::vec<2, T> alpha_eff{0};
+};
+
+// Evaluates variant `id` (VariantInfo::id) through the compiled GLSL.
+template <class T>
+FilteredNdf<T> EvaluateVariant(int id, Ndf ndf, glm::vec<2, T> alpha, const Footprint<T>& footprint,
+                               const Params<T>& params);
+
+// Plain NDF and rectangle means, for tests and tools.
+template <class T>
+T SlopeDensity(Ndf ndf, glm::vec<2, T> slope, glm::vec<2, T> alpha);
+template <class T>
+T GgxRectMeanSeed(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> half_sides);
+template <class T>
+T GgxRectMeanStable(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> half_sides);
+
+// --- Variant catalogue ------------------------------------------------------
+
+struct ParamInfo {
+  std::string_view name;
+  double default_value;
+  std::string_view meaning;
+};
+
+struct VariantInfo {
+  std::string_view name;
+  int id;  // VARIANT_* in variants.glsl
+  std::string_view summary;
+  std::string_view source;
+  std::vector<ParamInfo> params;
+  bool widens_roughness;
+  bool ggx_only;
+};
+
+std::span<const VariantInfo> Variants();
+const VariantInfo* FindVariant(std::string_view name);
+
+// Defaults of `info` overridden by `overrides` (name, value). Returns an error
+// message naming the problem for an unknown parameter or a value out of range.
+struct ResolvedParams {
+  Params<double> values;
+  std::string error;  // empty when fine
+};
+ResolvedParams ResolveParams(const VariantInfo& info,
+                             std::span<const std::pair<std::string, double>> overrides);
+
+// The GLSL sources of the shading core, by file name (core.glsl first).
+std::span<const std::pair<std::string_view, std::string_view>> GlslSources();
+
+}  // namespace shimmer::shading
+
+namespace shimmer::shading {
+// True when every catalogue entry's id equals its VARIANT_* constant in
+// variants.glsl (checked by a test).
+bool CatalogueMatchesGlsl();
+}  // namespace shimmer::shading

@@ -1,0 +1,123 @@
+// The GLSL shading core compiled as C++, once per precision.
+#include "shading.h"
+
+#include <glm/glm.hpp>
+
+namespace shimmer::shading {
+namespace glsl_f32 {
+using real = float;
+#include "glsl_compat.h"
+#include "core.glsl"
+}  // namespace glsl_f32
+
+namespace glsl_f64 {
+using real = double;
+#include "glsl_compat.h"
+#include "core.glsl"
+}  // namespace glsl_f64
+
+namespace {
+
+template <class T>
+struct Glsl;
+template <>
+struct Glsl<float> {
+  using ShadingFootprint = glsl_f32::ShadingFootprint;
+  using VariantParams = glsl_f32::VariantParams;
+  static auto Eval(int v, int ndf, glm::vec2 a, ShadingFootprint f, VariantParams p) {
+    return glsl_f32::evalVariant(v, ndf, a, f, p);
+  }
+  static float Density(int ndf, glm::vec2 s, glm::vec2 a) { return glsl_f32::slopeDensity(ndf, s, a); }
+  static float RectSeed(glm::vec2 c, glm::vec2 a, glm::vec2 f) { return glsl_f32::ggxRectMeanSeed(c, a, f); }
+  static float RectStable(glm::vec2 c, glm::vec2 a, glm::vec2 f) {
+    return glsl_f32::ggxRectMeanStable(c, a, f);
+  }
+};
+template <>
+struct Glsl<double> {
+  using ShadingFootprint = glsl_f64::ShadingFootprint;
+  using VariantParams = glsl_f64::VariantParams;
+  static auto Eval(int v, int ndf, glm::dvec2 a, ShadingFootprint f, VariantParams p) {
+    return glsl_f64::evalVariant(v, ndf, a, f, p);
+  }
+  static double Density(int ndf, glm::dvec2 s, glm::dvec2 a) { return glsl_f64::slopeDensity(ndf, s, a); }
+  static double RectSeed(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) {
+    return glsl_f64::ggxRectMeanSeed(c, a, f);
+  }
+  static double RectStable(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) {
+    return glsl_f64::ggxRectMeanStable(c, a, f);
+  }
+};
+
+}  // namespace
+
+template <class T>
+FilteredNdf<T> EvaluateVariant(int id, Ndf ndf, glm::vec<2, T> alpha, const Footprint<T>& footprint,
+                               const Params<T>& params) {
+  typename Glsl<T>::ShadingFootprint f;
+  f.hpp = footprint.hpp;
+  f.dhpp_dx = footprint.dhpp_dx;
+  f.dhpp_dy = footprint.dhpp_dy;
+  f.n = footprint.n;
+  f.dn_dx = footprint.dn_dx;
+  f.dn_dy = footprint.dn_dy;
+  f.dng_dx = footprint.dng_dx;
+  f.dng_dy = footprint.dng_dy;
+  typename Glsl<T>::VariantParams p;
+  p.fp_max = params.fp_max;
+  p.fp_min_cap = params.fp_min_cap;
+  p.sigma2 = params.sigma2;
+  p.kappa = params.kappa;
+  auto r = Glsl<T>::Eval(id, static_cast<int>(ndf), alpha, f, p);
+  return {r.slope_density, r.density, r.alpha_eff};
+}
+
+template <class T>
+T SlopeDensity(Ndf ndf, glm::vec<2, T> slope, glm::vec<2, T> alpha) {
+  return Glsl<T>::Density(static_cast<int>(ndf), slope, alpha);
+}
+template <class T>
+T GgxRectMeanSeed(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> half_sides) {
+  return Glsl<T>::RectSeed(centre, alpha, half_sides);
+}
+template <class T>
+T GgxRectMeanStable(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> half_sides) {
+  return Glsl<T>::RectStable(centre, alpha, half_sides);
+}
+
+#define SHIMMER_INSTANTIATE(T)                                                                        \
+  template FilteredNdf<T> EvaluateVariant<T>(int, Ndf, glm::vec<2, T>, const Footprint<T>&,           \
+                                             const Params<T>&);                                       \
+  template T SlopeDensity<T>(Ndf, glm::vec<2, T>, glm::vec<2, T>);                                    \
+  template T GgxRectMeanSeed<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                      \
+  template T GgxRectMeanStable<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);
+SHIMMER_INSTANTIATE(float)
+SHIMMER_INSTANTIATE(double)
+#undef SHIMMER_INSTANTIATE
+
+bool CatalogueMatchesGlsl() {
+  using namespace glsl_f64;
+  const std::pair<std::string_view, int> expected[] = {
+      {"none", VARIANT_NONE},
+      {"vlachos15", VARIANT_VLACHOS15},
+      {"toksvig-quad", VARIANT_TOKSVIG_QUAD},
+      {"k16-beckmann-rect", VARIANT_K16_BECKMANN_RECT},
+      {"k16-beckmann-parallelogram", VARIANT_K16_BECKMANN_PARALLELOGRAM},
+      {"k16-ggx-rect", VARIANT_K16_GGX_RECT},
+      {"k16-ggx-rect-stable", VARIANT_K16_GGX_RECT_STABLE},
+      {"k16-ggx-proxy", VARIANT_K16_GGX_PROXY},
+      {"tk19", VARIANT_TK19},
+      {"tk21", VARIANT_TK21},
+      {"filament", VARIANT_FILAMENT},
+      {"unity-hdrp", VARIANT_UNITY_HDRP},
+      {"godot", VARIANT_GODOT},
+  };
+  if (Variants().size() != std::size(expected) || std::size(expected) != size_t(VARIANT_COUNT)) return false;
+  for (const auto& [name, id] : expected) {
+    const VariantInfo* info = FindVariant(name);
+    if (!info || info->id != id) return false;
+  }
+  return true;
+}
+
+}  // namespace shimmer::shading

@@ -1,0 +1,123 @@
+// The variant catalogue: names, parameters with defaults, and sources, as
+// listed by `shimmer variants` and accepted by specs and `shimmer ndf`.
+#include <cmath>
+#include <string>
+
+#include "shading.h"
+
+namespace shimmer::shading {
+
+namespace {
+
+constexpr double kInvTwoPi = 0.15915494309189533577;
+
+const ParamInfo kFpMax1{"fp_max", 1.0, "upper clamp on the slope-space footprint half-sides (seed 000: \"usually 1.0\")"};
+
+std::vector<VariantInfo> BuildCatalogue() {
+  return {
+      {"none", 0, "point-sampled NDF, no filtering", "baseline", {}, false, false},
+      {"vlachos15", 1,
+       "perceptual roughness clamped from below by pow(sat(max(|dn/dx|^2, |dn/dy|^2)), 0.333) of the geometric normal",
+       "Vlachos, Advanced VR Rendering, GDC 2015 (cited in seed 000); Valve's The Lab renderer", {}, true, false},
+      {"toksvig-quad", 2,
+       "Toksvig: alpha^2 += 2 (1 - |Na|) / |Na|, Na the mean normal of the 2x2 quad rebuilt from dn/dx, dn/dy",
+       "Toksvig 2004 via seed 003 (Hill, Specular showdown) and seed 000", {}, true, false},
+      {"k16-beckmann-rect", 3,
+       "axis-aligned slope-space footprint rect, fp = (|dx hpp| + |dy hpp|) / 2 clamped to fp_max, alpha^2 += 2 fp^2; "
+       "exact Gaussian convolution for Beckmann, the same widening applied to GGX",
+       "seed 000 (Kaplanyan, Stable Specular Highlights, GDC 2016)", {kFpMax1}, true, false},
+      {"k16-beckmann-parallelogram", 4,
+       "full footprint parallelogram: R' = R + 2 U U^T, U = half the per-pixel hpp derivatives (0.5 px Gaussian pixel "
+       "filter), anisotropic and rotated",
+       "seed 000", {}, true, false},
+      {"k16-ggx-rect", 5,
+       "closed-form mean of GGX over the footprint rect as published, fp clamped to [min(alpha, fp_min_cap), fp_max], "
+       "Jacobian 1 / max(1e-3, h.z^4)",
+       "seed 000",
+       {kFpMax1, {"fp_min_cap", 0.1, "fp_min = min(alpha, fp_min_cap) against the formula's instability (seed 000)"}},
+       false, true},
+      {"k16-ggx-rect-stable", 6,
+       "the same rect mean, evaluated without cancellation (closed form in one axis, 8-point Gauss-Legendre on a tangent "
+       "substitution in the other): no fp_min, relative error <= 1e-4 in float",
+       "ours, after seed 000", {kFpMax1}, false, true},
+      {"k16-ggx-proxy", 7,
+       "Beckmann proxy for GGX: alpha^2 += 2 fp^2 with the rect footprint clamped to 0.7, GGX evaluated with the widened "
+       "alpha",
+       "seed 001 (Kaplanyan et al., Specular Antialiasing slides)",
+       {{"fp_max", 0.7, "upper clamp on the footprint half-sides (seed 001 uses 0.7)"}}, true, true},
+      {"tk19", 8, "alpha'^2 = sat(alpha^2 + min(2 sigma2 S, kappa)), S = |dn/dx|^2 + |dn/dy|^2 of the shading normal",
+       "Tokuyoshi and Kaplanyan, Improved Geometric Specular Antialiasing, I3D 2019",
+       {{"sigma2", 0.25, "screen-space variance of the filtering kernel"},
+        {"kappa", 0.18, "clamp on the kernel roughness"}},
+       true, false},
+      {"tk21", 9,
+       "projected space: p = alpha^2 / (1 - alpha^2), p' = p + min(sigma2 S, kappa), alpha'^2 = p' / (1 + p')",
+       "Tokuyoshi and Kaplanyan, Stable Geometric Specular Antialiasing with Projected-Space NDF Filtering, JCGT 2021",
+       {{"sigma2", kInvTwoPi, "screen-space variance of the kernel (1 / 2 pi, the authors' listing)"},
+        {"kappa", 0.18, "clamp on the kernel roughness"}},
+       true, false},
+      {"filament", 10, "tk19 form on the geometric normal with Filament's defaults", "Filament (google/filament)",
+       {{"sigma2", 0.15, "specularAntiAliasingVariance"}, {"kappa", 0.2, "specularAntiAliasingThreshold"}}, true,
+       false},
+      {"unity-hdrp", 11, "tk19 form on the geometric normal, HDRP Lit defaults, threshold used squared",
+       "Unity HDRP (ProjectedSpaceGeometricNormalFiltering)",
+       {{"sigma2", 0.1, "specular AA screen-space variance"}, {"kappa", 0.04, "threshold 0.2, squared by HDRP"}}, true,
+       false},
+      {"godot", 12, "tk19 constants, kernel added to alpha = r^2 instead of alpha^2 (Godot's quirk)",
+       "Godot 4 (roughness limiter)",
+       {{"sigma2", 0.25, "roughness_limiter_amount"}, {"kappa", 0.18, "roughness_limiter_limit"}}, true, false},
+  };
+}
+
+}  // namespace
+
+std::span<const VariantInfo> Variants() {
+  static const std::vector<VariantInfo> catalogue = BuildCatalogue();
+  return catalogue;
+}
+
+const VariantInfo* FindVariant(std::string_view name) {
+  for (const VariantInfo& v : Variants())
+    if (v.name == name) return &v;
+  return nullptr;
+}
+
+std::optional<Ndf> ParseNdf(std::string_view name) {
+  if (name == "ggx") return Ndf::kGgx;
+  if (name == "beckmann") return Ndf::kBeckmann;
+  return std::nullopt;
+}
+
+std::string_view NdfName(Ndf ndf) { return ndf == Ndf::kGgx ? "ggx" : "beckmann"; }
+
+ResolvedParams ResolveParams(const VariantInfo& info,
+                             std::span<const std::pair<std::string, double>> overrides) {
+  ResolvedParams r;
+  auto slot = [&r](std::string_view name) -> double* {
+    if (name == "fp_max") return &r.values.fp_max;
+    if (name == "fp_min_cap") return &r.values.fp_min_cap;
+    if (name == "sigma2") return &r.values.sigma2;
+    if (name == "kappa") return &r.values.kappa;
+    return nullptr;
+  };
+  for (const ParamInfo& p : info.params) *slot(p.name) = p.default_value;
+  for (const auto& [name, value] : overrides) {
+    bool known = false;
+    for (const ParamInfo& p : info.params) known = known || p.name == name;
+    if (!known) {
+      std::string list;
+      for (const ParamInfo& p : info.params) list += (list.empty() ? "" : ", ") + std::string(p.name);
+      r.error = "variant " + std::string(info.name) + " has no parameter '" + name + "'" +
+                (list.empty() ? " (it takes none)" : " (it takes: " + list + ")");
+      return r;
+    }
+    if (!std::isfinite(value) || value < 0) {
+      r.error = "parameter " + name + " must be a finite value >= 0, got " + std::to_string(value);
+      return r;
+    }
+    *slot(name) = value;
+  }
+  return r;
+}
+
+}  // namespace shimmer::shading

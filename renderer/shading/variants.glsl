@@ -1,0 +1,189 @@
+// Specular anti-aliasing filter variants: each maps the shading footprint to
+// a filtered slope-space NDF value and, where it widens roughness, the
+// effective roughness. Names, parameters, defaults and sources are listed for
+// users in variant_registry.cpp (`shimmer variants`).
+
+const int VARIANT_NONE = 0;
+const int VARIANT_VLACHOS15 = 1;
+const int VARIANT_TOKSVIG_QUAD = 2;
+const int VARIANT_K16_BECKMANN_RECT = 3;
+const int VARIANT_K16_BECKMANN_PARALLELOGRAM = 4;
+const int VARIANT_K16_GGX_RECT = 5;
+const int VARIANT_K16_GGX_RECT_STABLE = 6;
+const int VARIANT_K16_GGX_PROXY = 7;
+const int VARIANT_TK19 = 8;
+const int VARIANT_TK21 = 9;
+const int VARIANT_FILAMENT = 10;
+const int VARIANT_UNITY_HDRP = 11;
+const int VARIANT_GODOT = 12;
+const int VARIANT_COUNT = 13;
+
+// What a pixel knows about its neighbourhood. Derivatives are per pixel along
+// screen x and y, from 2x2 quad differences or from ray differentials.
+struct ShadingFootprint {
+  vec2 hpp;      // slope-space half vector h.xy / h.z in the shading tangent frame (seed 000)
+  vec2 dhpp_dx;  // d hpp / d screen x
+  vec2 dhpp_dy;
+  vec3 n;        // unit shading normal
+  vec3 dn_dx;    // derivatives of the shading normal
+  vec3 dn_dy;
+  vec3 dng_dx;   // derivatives of the geometric normal (engine presets use these)
+  vec3 dng_dy;
+};
+
+// The union of all variants' parameters; each variant reads its own.
+struct VariantParams {
+  real fp_max;      // upper clamp on the slope-space footprint half-sides
+  real fp_min_cap;  // k16-ggx-rect: fp_min = min(alpha, fp_min_cap)
+  real sigma2;      // screen-space variance of the filtering kernel
+  real kappa;       // clamp on the kernel roughness
+};
+
+struct FilteredNdf {
+  real slope_density;  // filtered P22 at hpp
+  real density;        // slope_density / h.z^4, the solid-angle NDF D(h)
+  vec2 alpha_eff;      // roughness used for the lobe (the material's where not widened)
+};
+
+// Axis-aligned rectangle bounding the footprint parallelogram: half-sides
+// (|dx hpp| + |dy hpp|) / 2 (seed 000 "More Temporal Stability"; seed 001).
+vec2 footprintHalfSides(ShadingFootprint f) {
+  return (abs(f.dhpp_dx) + abs(f.dhpp_dy)) * real(0.5);
+}
+
+real normalSpread(vec3 dx, vec3 dy) { return dot(dx, dx) + dot(dy, dy); }
+
+FilteredNdf widenedNdf(int ndf, vec2 hpp, vec2 alpha2) {
+  FilteredNdf r;
+  r.alpha_eff = sqrt(alpha2);
+  r.slope_density = slopeDensity(ndf, hpp, r.alpha_eff);
+  r.density = r.slope_density * slopeToSolidAngle(hpp);
+  return r;
+}
+
+// Seed 000, "Filtering Beckmann" with the axis-aligned rect: a Gaussian pixel
+// filter of 0.5 px standard deviation has slope-space std fp, and Beckmann
+// roughness is sqrt(2) std, so alpha^2 += 2 fp^2, fp clamped to fp_max.
+vec2 k16RectAlpha2(vec2 alpha, ShadingFootprint f, real fpMax) {
+  vec2 fp = min(footprintHalfSides(f), vec2(fpMax, fpMax));
+  return alpha * alpha + real(2) * fp * fp;
+}
+
+// Seed 000, "Filtering Beckmann" with the full parallelogram: R' = R + 2 C,
+// C = U U^T. U holds the two propagated standard-deviation vectors of the
+// 0.5 px Gaussian pixel filter, i.e. half of the per-pixel derivatives; with
+// that scale the parallelogram and the rect agree on axis-aligned footprints
+// (the slide's bare U = dh/duv would widen four times as much).
+FilteredNdf k16Parallelogram(int ndf, vec2 alpha, ShadingFootprint f) {
+  vec2 ux = real(0.5) * f.dhpp_dx;
+  vec2 uy = real(0.5) * f.dhpp_dy;
+  vec3 r = vec3(alpha.x * alpha.x + real(2) * (ux.x * ux.x + uy.x * uy.x),
+                real(2) * (ux.x * ux.y + uy.x * uy.y),
+                alpha.y * alpha.y + real(2) * (ux.y * ux.y + uy.y * uy.y));
+  FilteredNdf o;
+  o.alpha_eff = sqrt(vec2(r.x, r.z));
+  o.slope_density = slopeDensityMatrix(ndf, f.hpp, r);
+  o.density = o.slope_density * slopeToSolidAngle(f.hpp);
+  return o;
+}
+
+// Vlachos, "Advanced VR Rendering" (GDC 2015), as cited in seed 000 and as in
+// Valve's The Lab renderer: perceptual roughness r = sqrt(alpha) is clamped
+// from below by pow(sat(max(|dn/dx|^2, |dn/dy|^2)), 0.333) of the geometric normal.
+vec2 vlachosAlpha2(vec2 alpha, ShadingFootprint f) {
+  real k = pow(sat(max(dot(f.dng_dx, f.dng_dx), dot(f.dng_dy, f.dng_dy))), real(0.333));
+  vec2 r = max(sqrt(alpha), vec2(k, k));
+  vec2 a = r * r;
+  return a * a;
+}
+
+// Toksvig (2004) as in seed 003: sigma^2 = (1 - |Na|) / |Na| from the length
+// of the averaged normal, and p = s / (1 + s sigma^2) on the Blinn-Phong
+// power, i.e. alpha^2 += 2 sigma^2 in Beckmann terms (alpha^2 ~ 2 / s). Na is
+// the mean of the four normals of the 2x2 quad around the pixel, rebuilt from
+// the derivatives. 1 - |Na|^2 = (1/16) sum_{i<j} |n_i - n_j|^2 avoids the
+// cancellation of 1 - |Na| for nearly parallel normals.
+vec2 toksvigAlpha2(vec2 alpha, ShadingFootprint f) {
+  vec3 hx = real(0.5) * f.dn_dx;
+  vec3 hy = real(0.5) * f.dn_dy;
+  vec3 n0 = safeNormalize(f.n - hx - hy, f.n);
+  vec3 n1 = safeNormalize(f.n + hx - hy, f.n);
+  vec3 n2 = safeNormalize(f.n - hx + hy, f.n);
+  vec3 n3 = safeNormalize(f.n + hx + hy, f.n);
+  real spread = dot(n0 - n1, n0 - n1) + dot(n0 - n2, n0 - n2) + dot(n0 - n3, n0 - n3) +
+                dot(n1 - n2, n1 - n2) + dot(n1 - n3, n1 - n3) + dot(n2 - n3, n2 - n3);
+  real oneMinusLen2 = min(spread / real(16), real(1));
+  real len = sqrt(real(1) - oneMinusLen2);
+  vec2 a2 = alpha * alpha;
+  if (len < real(1e-6)) return max(a2, vec2(1, 1));
+  real sigma2 = oneMinusLen2 / ((real(1) + len) * len);
+  return max(a2, min(a2 + real(2) * sigma2, vec2(1, 1)));
+}
+
+// Tokuyoshi and Kaplanyan, "Improved Geometric Specular Antialiasing"
+// (I3D 2019), in the form engines ship: alpha'^2 = sat(alpha^2 + min(2 sigma2 S, kappa)),
+// S = |dn/dx|^2 + |dn/dy|^2. Engine presets differ in the constants and in
+// which normal they differentiate.
+vec2 tk19Alpha2(vec2 alpha, real spread, real sigma2, real kappa) {
+  real k = min(real(2) * sigma2 * spread, kappa);
+  vec2 a2 = alpha * alpha + vec2(k, k);
+  return vec2(sat(a2.x), sat(a2.y));
+}
+
+// Tokuyoshi and Kaplanyan, "Stable Geometric Specular Antialiasing with
+// Projected-Space NDF Filtering" (JCGT 2021): p = alpha^2 / (1 - alpha^2),
+// p' = p + min(sigma2 S, kappa), alpha'^2 = p' / (1 + p'). Written as
+// (alpha^2 + k (1 - alpha^2)) / (1 + k (1 - alpha^2)), which is the same and
+// has no pole at alpha = 1.
+vec2 tk21Alpha2(vec2 alpha, real spread, real sigma2, real kappa) {
+  real k = min(sigma2 * spread, kappa);
+  vec2 a2 = min(alpha * alpha, vec2(1, 1));
+  vec2 km = k * (vec2(1, 1) - a2);
+  return (a2 + km) / (vec2(1, 1) + km);
+}
+
+// Godot 4 (scene shaders, roughness limiter): the tk19 kernel added to
+// roughness2 = r * r of the perceptual roughness r, which is alpha, not alpha^2.
+vec2 godotAlpha2(vec2 alpha, real spread, real sigma2, real kappa) {
+  real k = min(real(2) * sigma2 * spread, kappa);
+  vec2 a = min(alpha + vec2(k, k), vec2(1, 1));
+  return a * a;
+}
+
+FilteredNdf evalVariant(int variant, int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {
+  alpha = clampAlpha(alpha);
+  vec2 hpp = clampSlope(f.hpp);
+  if (variant == VARIANT_VLACHOS15) return widenedNdf(ndf, hpp, vlachosAlpha2(alpha, f));
+  if (variant == VARIANT_TOKSVIG_QUAD) return widenedNdf(ndf, hpp, toksvigAlpha2(alpha, f));
+  if (variant == VARIANT_K16_BECKMANN_RECT || variant == VARIANT_K16_GGX_PROXY)
+    return widenedNdf(ndf, hpp, k16RectAlpha2(alpha, f, p.fp_max));
+  if (variant == VARIANT_K16_BECKMANN_PARALLELOGRAM) return k16Parallelogram(ndf, alpha, f);
+  if (variant == VARIANT_K16_GGX_RECT) {
+    // Seed 000 as published: footprint clamped to [min(alpha, 0.1), fp_max]
+    // and the Jacobian 1 / max(1e-3, h.z^4).
+    vec2 fpMin = min(alpha, vec2(p.fp_min_cap, p.fp_min_cap));
+    vec2 fp = clamp(footprintHalfSides(f), fpMin, max(fpMin, vec2(p.fp_max, p.fp_max)));
+    FilteredNdf r;
+    r.alpha_eff = alpha;
+    r.slope_density = ggxRectMeanSeed(hpp, alpha, fp);
+    r.density = r.slope_density / max(real(1e-3), real(1) / slopeToSolidAngle(hpp));
+    return r;
+  }
+  if (variant == VARIANT_K16_GGX_RECT_STABLE) {
+    vec2 fp = min(footprintHalfSides(f), vec2(p.fp_max, p.fp_max));
+    FilteredNdf r;
+    r.alpha_eff = alpha;
+    r.slope_density = ggxRectMeanStable(hpp, alpha, fp);
+    r.density = r.slope_density * slopeToSolidAngle(hpp);
+    return r;
+  }
+  if (variant == VARIANT_TK19)
+    return widenedNdf(ndf, hpp, tk19Alpha2(alpha, normalSpread(f.dn_dx, f.dn_dy), p.sigma2, p.kappa));
+  if (variant == VARIANT_TK21)
+    return widenedNdf(ndf, hpp, tk21Alpha2(alpha, normalSpread(f.dn_dx, f.dn_dy), p.sigma2, p.kappa));
+  if (variant == VARIANT_FILAMENT || variant == VARIANT_UNITY_HDRP)
+    return widenedNdf(ndf, hpp, tk19Alpha2(alpha, normalSpread(f.dng_dx, f.dng_dy), p.sigma2, p.kappa));
+  if (variant == VARIANT_GODOT)
+    return widenedNdf(ndf, hpp, godotAlpha2(alpha, normalSpread(f.dn_dx, f.dn_dy), p.sigma2, p.kappa));
+  return widenedNdf(ndf, hpp, alpha * alpha);  // VARIANT_NONE: point-sampled NDF
+}

@@ -1,0 +1,72 @@
+#include "spirv_compiler.h"
+
+#include <glslang/Public/ResourceLimits.h>
+#include <glslang/Public/ShaderLang.h>
+#include <glslang/SPIRV/GlslangToSpv.h>
+
+#include <mutex>
+
+#include "shading.h"
+
+namespace shimmer::shading {
+
+namespace {
+
+class SourceIncluder : public glslang::TShader::Includer {
+ public:
+  explicit SourceIncluder(std::span<const GlslFile> extra) : extra_(extra) {}
+
+  IncludeResult* includeLocal(const char* name, const char*, size_t) override { return Find(name); }
+  IncludeResult* includeSystem(const char* name, const char*, size_t) override { return Find(name); }
+  void releaseInclude(IncludeResult* result) override { delete result; }
+
+ private:
+  IncludeResult* Find(std::string_view name) {
+    for (const GlslFile& f : extra_)
+      if (f.name == name) return new IncludeResult(f.name, f.text.data(), f.text.size(), nullptr);
+    for (const auto& [file, text] : GlslSources())
+      if (file == name) return new IncludeResult(std::string(file), text.data(), text.size(), nullptr);
+    return nullptr;  // glslang reports "could not process include directive" with the name
+  }
+
+  std::span<const GlslFile> extra_;
+};
+
+void InitializeOnce() {
+  static std::once_flag once;
+  std::call_once(once, [] { glslang::InitializeProcess(); });
+}
+
+}  // namespace
+
+SpirvResult CompileCompute(const GlslFile& main, std::span<const GlslFile> extra) {
+  InitializeOnce();
+  SpirvResult result;
+  glslang::TShader shader(EShLangCompute);
+  const char* text = main.text.c_str();
+  const int length = static_cast<int>(main.text.size());
+  const char* name = main.name.c_str();
+  shader.setStringsWithLengthsAndNames(&text, &length, &name, 1);
+  shader.setEnvInput(glslang::EShSourceGlsl, EShLangCompute, glslang::EShClientVulkan, 100);
+  shader.setEnvClient(glslang::EShClientVulkan, glslang::EShTargetVulkan_1_2);
+  shader.setEnvTarget(glslang::EShTargetSpv, glslang::EShTargetSpv_1_5);
+  const auto messages = static_cast<EShMessages>(EShMsgSpvRules | EShMsgVulkanRules);
+  SourceIncluder includer(extra);
+  if (!shader.parse(GetDefaultResources(), 460, false, messages, includer)) {
+    result.error = std::string(shader.getInfoLog()) + shader.getInfoDebugLog();
+    return result;
+  }
+  glslang::TProgram program;
+  program.addShader(&shader);
+  if (!program.link(messages)) {
+    result.error = std::string(program.getInfoLog()) + program.getInfoDebugLog();
+    return result;
+  }
+  glslang::SpvOptions options;
+  options.disableOptimizer = false;
+  glslang::GlslangToSpv(*program.getIntermediate(EShLangCompute), result.words, &options);
+  if (result.words.empty()) result.error = main.name + ": SPIR-V generation produced no code";
+  return result;
+}
+
+}  // namespace shimmer::shading

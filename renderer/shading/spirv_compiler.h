@@ -1,0 +1,28 @@
+// GLSL -> SPIR-V in process (libglslang), for the renderer's kernels, user
+// variant files and the shading-core compile test. No Vulkan here.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace shimmer::shading {
+
+struct GlslFile {
+  std::string name;  // what `#include "name"` and error messages use
+  std::string text;
+};
+
+struct SpirvResult {
+  std::vector<std::uint32_t> words;
+  std::string error;  // empty on success; otherwise glslang's log with file:line
+  bool ok() const { return error.empty(); }
+};
+
+// Compiles a compute shader for Vulkan 1.2 (SPIR-V 1.5). `#include "x"`
+// resolves against `extra` first, then the shading core (GlslSources()).
+SpirvResult CompileCompute(const GlslFile& main, std::span<const GlslFile> extra = {});
+
+}  // namespace shimmer::shading

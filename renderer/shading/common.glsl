@@ -14,6 +14,9 @@ const real HALF_PI = real(1.57079632679489661923);
 // Roughness is clamped from below so that 1 / (pi * ax * ay) stays finite in
 // float; 1e-4 is ten times sharper than the sharpest material the tests use.
 const real ALPHA_MIN = real(1e-4);
+// And from above, so that alpha^2 and its sums stay finite for any input
+// (physical roughness ends at 1; engines clamp there too).
+const real ALPHA_MAX = real(100);
 // Slopes beyond this are treated as this (density there is zero in float and
 // double alike); keeps (1 + |s|^2)^2 finite in float.
 const real SLOPE_MAX = real(1e8);
@@ -22,7 +25,7 @@ real sqr(real x) { return x * x; }
 real sat(real x) { return clamp(x, real(0), real(1)); }
 real safeSqrt(real x) { return sqrt(max(x, real(0))); }
 
-vec2 clampAlpha(vec2 a) { return max(a, vec2(ALPHA_MIN, ALPHA_MIN)); }
+vec2 clampAlpha(vec2 a) { return clamp(a, vec2(ALPHA_MIN, ALPHA_MIN), vec2(ALPHA_MAX, ALPHA_MAX)); }
 
 vec2 clampSlope(vec2 s) {
   real m = max(abs(s.x), abs(s.y));

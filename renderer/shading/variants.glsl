@@ -150,8 +150,15 @@ vec2 godotAlpha2(vec2 alpha, real spread, real sigma2, real kappa) {
   return a * a;
 }
 
+// Slope-space footprints beyond 1e4 per pixel (silhouettes) filter as much as
+// 1e4 does; capping them keeps squared covariances finite in float.
+const real FOOTPRINT_MAX = real(1e4);
+
 FilteredNdf evalVariant(int variant, int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {
   alpha = clampAlpha(alpha);
+  vec2 lim = vec2(FOOTPRINT_MAX, FOOTPRINT_MAX);
+  f.dhpp_dx = clamp(f.dhpp_dx, -lim, lim);
+  f.dhpp_dy = clamp(f.dhpp_dy, -lim, lim);
   vec2 hpp = clampSlope(f.hpp);
   if (variant == VARIANT_VLACHOS15) return widenedNdf(ndf, hpp, vlachosAlpha2(alpha, f));
   if (variant == VARIANT_TOKSVIG_QUAD) return widenedNdf(ndf, hpp, toksvigAlpha2(alpha, f));
@@ -160,12 +167,15 @@ FilteredNdf evalVariant(int variant, int ndf, vec2 alpha, ShadingFootprint f, Va
   if (variant == VARIANT_K16_BECKMANN_PARALLELOGRAM) return k16Parallelogram(ndf, alpha, f);
   if (variant == VARIANT_K16_GGX_RECT) {
     // Seed 000 as published: footprint clamped to [min(alpha, 0.1), fp_max]
-    // and the Jacobian 1 / max(1e-3, h.z^4).
+    // and the Jacobian 1 / max(1e-3, h.z^4). Where the formula cancels to a
+    // negative value, or to 0/0 when x2 - x1 rounds to zero far from the
+    // lobe, the result is cut to zero so that no pixel goes negative or NaN.
     vec2 fpMin = min(alpha, vec2(p.fp_min_cap, p.fp_min_cap));
     vec2 fp = clamp(footprintHalfSides(f), fpMin, max(fpMin, vec2(p.fp_max, p.fp_max)));
     FilteredNdf r;
     r.alpha_eff = alpha;
-    r.slope_density = ggxRectMeanSeed(hpp, alpha, fp);
+    real v = ggxRectMeanSeed(hpp, alpha, fp);
+    r.slope_density = (v > real(0) && v < real(1e30)) ? v : real(0);
     r.density = r.slope_density / max(real(1e-3), real(1) / slopeToSolidAngle(hpp));
     return r;
   }

@@ -25,7 +25,7 @@ double QuadratureRectMean(double cx, double cy, double fx, double fy, double ax,
   auto inner = [&](double x) {
     return test::Integrate([&](double y) { return p22(x, y); }, cy - fy, cy + fy, {0.0}, 1e-11);
   };
-  const double integral = test::Integrate(inner, cx - fx, cx + fx, {0.0}, 1e-10);
+  const double integral = test::Integrate(inner, cx - fx, cx + fx, {0.0}, 1e-9, 0, 30);
   return integral / (4 * fx * fy);
 }
 

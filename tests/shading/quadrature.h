@@ -2,9 +2,11 @@
 // the shading tests compare against. Bisects until the Gauss/Kronrod
 // difference is below `rel_tol` of the interval's own estimate, so that
 // positive integrands come out with that relative accuracy even where they
-// are sharp (alpha = 1e-3) or tiny (far tails).
+// are sharp (alpha = 1e-3) or tiny (far tails). `abs_tol` (per interval)
+// stops refinement where an integrand is only rounding noise.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <vector>
@@ -33,26 +35,28 @@ inline double GaussKronrod15(const std::function<double(double)>& f, double a, d
 }
 
 inline double IntegrateInterval(const std::function<double(double)>& f, double a, double b, double rel_tol,
-                                double abs_tol, int depth) {
+                                double abs_tol, int depth_left) {
   double err = 0;
   const double v = GaussKronrod15(f, a, b, &err);
-  if (err <= std::max(rel_tol * std::abs(v), abs_tol) || depth >= 60) return v;
+  if (err <= std::max(rel_tol * std::abs(v), abs_tol) || depth_left <= 0) return v;
   const double m = 0.5 * (a + b);
-  return IntegrateInterval(f, a, m, rel_tol, abs_tol * 0.5, depth + 1) +
-         IntegrateInterval(f, m, b, rel_tol, abs_tol * 0.5, depth + 1);
+  return IntegrateInterval(f, a, m, rel_tol, abs_tol, depth_left - 1) +
+         IntegrateInterval(f, m, b, rel_tol, abs_tol, depth_left - 1);
 }
 
 // Integral of f over [a, b], split first at the given interior points (where
-// f has a peak or kink) so that bisection finds them quickly.
+// f has a peak or kink) so that bisection finds them quickly. When f is itself
+// an adaptive integral, its noise would make bisection run away: give the
+// outer integral a looser tolerance and a small `max_depth`.
 inline double Integrate(const std::function<double(double)>& f, double a, double b, std::vector<double> breaks = {},
-                        double rel_tol = 1e-10, double abs_tol = 0) {
+                        double rel_tol = 1e-10, double abs_tol = 0, int max_depth = 50) {
   std::vector<double> pts{a};
   for (double x : breaks)
     if (x > a && x < b) pts.push_back(x);
   pts.push_back(b);
   std::sort(pts.begin() + 1, pts.end() - 1);
   double sum = 0;
-  for (size_t i = 0; i + 1 < pts.size(); ++i) sum += IntegrateInterval(f, pts[i], pts[i + 1], rel_tol, abs_tol, 0);
+  for (size_t i = 0; i + 1 < pts.size(); ++i) sum += IntegrateInterval(f, pts[i], pts[i + 1], rel_tol, abs_tol, max_depth);
   return sum;
 }
 

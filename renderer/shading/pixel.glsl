@@ -105,6 +105,7 @@ SurfaceSample traceRay(Ray r, Light light) {
 // silhouette; the analytic counterpart continues the neighbour pixel's ray
 // onto this sample's tangent plane and evaluates this primitive there.
 SurfaceSample continueOnPrim(SurfaceSample s, Camera c, Light light, vec2 pix) {
+  if (s.prim < 0) return s;
   Ray r = cameraRay(c, pix);
   real denom = dot(r.d, s.ng);
   if (abs(denom) < real(1e-9)) return s;
@@ -215,7 +216,7 @@ vec2 pixelCentre(ivec2 px) { return vec2(real(px.x) + real(0.5), real(px.y) + re
 // The sample of the neighbour pixel px as the quad sees it from s: its own
 // surface when it shows the same primitive, else s's primitive continued.
 SurfaceSample quadNeighbour(SurfaceSample s, SurfaceSample other, Camera c, Light light, ivec2 px) {
-  if (other.prim == s.prim) return other;
+  if (other.prim == s.prim || s.prim < 0) return other;
   return continueOnPrim(s, c, light, pixelCentre(px));
 }
 

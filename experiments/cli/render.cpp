@@ -33,6 +33,7 @@ struct RenderOptions {
   std::string device;
   std::string out = "shimmer-render";
   bool list_devices = false;
+  std::string preview;
 };
 
 std::pair<std::string, double> ParseParam(const std::string& text) {
@@ -97,6 +98,7 @@ void Run(const RenderOptions& o) {
   if (o.reference_tolerance > 0 && o.reference_spp == 0) s.reference_spp = 4;
   s.max_rounds = o.max_rounds;
   s.device = o.device;
+  s.preview_png = o.preview;
   const bool tty = isatty(fileno(stderr));
   std::string error = render::RenderSequence(s, o.out, tty ? PrintProgress : std::function<void(int, int)>());
   if (!error.empty()) throw std::runtime_error(error);
@@ -143,6 +145,7 @@ void AddRenderCommand(CLI::App& app) {
                   "standard error is below T times max(luminance, 0.01)");
   cmd->add_option("--max-rounds", o->max_rounds, "Adaptive reference: most rounds per frame")->capture_default_str();
   cmd->add_option("--device", o->device, "Vulkan device (substring of its name)");
+  cmd->add_option("--preview", o->preview, "Also write a tone-mapped PNG of frame 0 to this file");
   cmd->add_flag("--list-devices", o->list_devices, "List Vulkan devices and exit");
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   (void)spp;

@@ -6,6 +6,8 @@
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include <chrono>
 #include <condition_variable>
@@ -291,11 +293,9 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
   empty.size[1] = 0;
   std::memcpy(im.frame_buf->data(), &empty, sizeof empty);
   GpuPush push{};
-  double unused = 0;
   vk::Buffer* bufs[] = {im.frame_buf.get(), im.scene_buf.get(), im.image_buf.get(), im.counter_buf.get()};
   vk::DispatchResult warm =
       im.ctx->Dispatch(*im.pipeline, bufs, std::as_bytes(std::span<const GpuPush>(&push, 1)), 1, 1);
-  (void)unused;
   if (!warm.error.empty()) return Out{nullptr, warm.error};
   im.timings.jit_ms = MsSince(t2);
   return Out{std::move(r), ""};
@@ -381,6 +381,30 @@ std::string WriteExr(const std::string& path, const Frame& frame, bool with_stde
   if (ec) {
     std::filesystem::remove(tmp, ec);
     return "cannot write " + path + ": " + ec.message();
+  }
+  return "";
+}
+
+std::string WritePreviewPng(const std::string& path, const Frame& frame) {
+  cv::Mat img(frame.height, frame.width, CV_8UC3);
+  const std::size_t plane = std::size_t(frame.width) * frame.height;
+  auto encode = [](float x) {
+    double v = std::max(0.0, double(x));
+    v = v / (1.0 + v);
+    v = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+    return cv::saturate_cast<unsigned char>(v * 255.0 + 0.5);
+  };
+  for (int y = 0; y < frame.height; ++y)
+    for (int x = 0; x < frame.width; ++x) {
+      std::size_t i = std::size_t(y) * frame.width + x;
+      img.at<cv::Vec3b>(y, x) = {encode(frame.planes[(kBeautyR + 2) * plane + i]),
+                                 encode(frame.planes[(kBeautyR + 1) * plane + i]),
+                                 encode(frame.planes[kBeautyR * plane + i])};
+    }
+  try {
+    if (!cv::imwrite(path, img)) return "cannot write " + path;
+  } catch (const cv::Exception& e) {
+    return "cannot write " + path + ": " + e.what();
   }
   return "";
 }
@@ -538,6 +562,12 @@ std::string RenderSequence(const RenderSettings& settings, const std::string& ou
       fj["rounds"] = r.frame.rounds;
     }
     seq["frames"].push_back(fj);
+    if (i == 0 && !settings.preview_png.empty()) {
+      if (std::string e = WritePreviewPng(settings.preview_png, r.frame); !e.empty()) {
+        writer.Finish();
+        return e;
+      }
+    }
     writer.Push((fs::path(out_dir) / FrameName(i)).string(), std::move(r.frame));
     if (progress) progress(i + 1, settings.frames);
   }

@@ -54,6 +54,7 @@ struct RenderSettings {
   int max_rounds = 64;             // adaptive cap
   std::string variant_file;        // user variant GLSL defining userVariant(...)
   std::string device;              // substring of the Vulkan device name
+  std::string preview_png;         // when set: a tone-mapped PNG of frame 0's beauty
 };
 
 // Luminance floor of the adaptive reference's relative error (dark pixels
@@ -124,6 +125,9 @@ std::string SourceRevision();
 // Returns an error message, empty on success. `progress(done, total)` after each frame.
 std::string RenderSequence(const RenderSettings& settings, const std::string& out_dir,
                            const std::function<void(int, int)>& progress);
+
+// Writes a tone-mapped (x / (1 + x), sRGB) 8-bit PNG of the beauty layer.
+std::string WritePreviewPng(const std::string& path, const Frame& frame);
 
 // Writes one frame as float EXR to path (through path.tmp and a rename).
 std::string WriteExr(const std::string& path, const Frame& frame, bool with_stderr);

@@ -119,31 +119,34 @@ real intersectSphere(vec3 o, vec3 d, vec3 c, real r) {
   return real(-1);
 }
 
-// Capsule (segment a-b, radius r), after Inigo Quilez's capsule intersector.
+// Capsule (segment a-b, radius r): the infinite cylinder solved like the
+// sphere above, from the ray's closest approach to the axis (thin, distant
+// wires stay accurate in float), then the end caps as spheres.
 real intersectCapsule(vec3 o, vec3 d, vec3 a, vec3 b, real r) {
   vec3 ba = b - a;
+  real len = length(ba);
+  vec3 u = ba / len;
   vec3 oa = o - a;
-  real baba = dot(ba, ba);
-  real bard = dot(ba, d);
-  real baoa = dot(ba, oa);
-  real rdoa = dot(d, oa);
-  real oaoa = dot(oa, oa);
-  real qa = baba - bard * bard;
-  real qb = baba * rdoa - baoa * bard;
-  real qc = baba * oaoa - baoa * baoa - r * r * baba;
-  real h = qb * qb - qa * qc;
-  if (h < real(0)) return real(-1);
-  if (qa > real(1e-12) * baba) {
-    real t = (-qb - sqrt(h)) / qa;
-    real y = baoa + t * bard;
-    if (y > real(0) && y < baba) return t > RAY_TMIN ? t : real(-1);
+  vec3 dp = d - u * dot(d, u);
+  vec3 op = oa - u * dot(oa, u);
+  real qa = dot(dp, dp);
+  real best = real(-1);
+  if (qa > real(1e-12)) {
+    real t0 = -dot(op, dp) / qa;
+    vec3 w = op + dp * t0;
+    real disc = r * r - dot(w, w);
+    if (disc < real(0)) return real(-1);
+    real h = sqrt(disc / qa);
+    real t = t0 - h;
+    if (!(t > RAY_TMIN)) t = t0 + h;
+    real y = dot(oa + d * t, u);
+    if (t > RAY_TMIN && y > real(0) && y < len) best = t;
   }
-  // One of the end caps.
-  real t0 = intersectSphere(o, d, a, r);
-  real t1 = intersectSphere(o, d, b, r);
-  if (t0 < real(0)) return t1;
-  if (t1 < real(0)) return t0;
-  return min(t0, t1);
+  real t1 = intersectSphere(o, d, a, r);
+  real t2 = intersectSphere(o, d, b, r);
+  if (t1 > real(0) && (best < real(0) || t1 < best)) best = t1;
+  if (t2 > real(0) && (best < real(0) || t2 < best)) best = t2;
+  return best;
 }
 
 real intersectPlane(vec3 o, vec3 d, real height) {

@@ -4,3 +4,6 @@
 #include "ndf.glsl"
 #include "ggx_rect.glsl"
 #include "variants.glsl"
+#include "brdf.glsl"
+#include "scene.glsl"
+#include "pixel.glsl"

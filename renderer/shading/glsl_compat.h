@@ -21,6 +21,7 @@ using glm::abs;
 using glm::atan;
 using glm::clamp;
 using glm::cos;
+using glm::cross;
 using glm::dot;
 using glm::exp;
 using glm::inversesqrt;

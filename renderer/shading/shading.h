@@ -58,6 +58,56 @@ T GgxRectMeanSeed(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> ha
 template <class T>
 T GgxRectMeanStable(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> half_sides);
 
+// --- Pixel oracle ------------------------------------------------------------
+// The renderer's per-pixel computation (scene.glsl, pixel.glsl) run in double
+// on the CPU: the oracle the GPU frames are compared against.
+
+enum class DerivativeSource { kAnalytic = 0, kQuadFine = 1, kQuadCoarse = 2 };
+
+struct CameraDesc {
+  glm::dvec3 pos{0, 0, 5};
+  glm::dvec3 fwd{0, 0, -1};  // orthonormal frame
+  glm::dvec3 right{1, 0, 0};
+  glm::dvec3 up{0, 1, 0};
+  double tan_half_fov_y = 0.4;
+  int width = 64;
+  int height = 64;
+};
+
+enum class LightType { kDirectional = 0, kSphere = 1 };
+struct LightDesc {
+  LightType type = LightType::kDirectional;
+  glm::dvec3 vec{0, 1, 0};       // unit direction towards the light, or the sphere's centre
+  glm::dvec3 radiance{1, 1, 1};  // irradiance at normal incidence, or intensity
+  double radius = 0;
+};
+
+struct MaterialDesc {
+  Ndf ndf = Ndf::kGgx;
+  glm::dvec2 alpha{0.1, 0.1};
+  glm::dvec3 f0{0.04, 0.04, 0.04};
+  glm::dvec3 albedo{0.5, 0.5, 0.5};
+};
+
+struct PixelOracle {
+  bool hit = false;
+  int prim = -1;
+  double depth = 0;  // distance from the eye along the ray
+  glm::dvec3 normal{0};
+  glm::dvec2 hpp{0};
+  glm::dvec3 specular{0};
+  glm::dvec3 diffuse{0};
+  glm::dvec2 alpha_eff{0};
+  glm::dvec2 footprint{0};
+  Footprint<double> derivatives;
+};
+
+// Shades the centre of pixel `px` as the kernel does; `scene_words` is the
+// packed scene uploaded to the GPU (see scene.glsl for the layout).
+PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc& camera, const LightDesc& light,
+                       const MaterialDesc& material, int variant, DerivativeSource derivatives,
+                       const Params<double>& params, glm::ivec2 px);
+
 // --- Variant catalogue ------------------------------------------------------
 
 struct ParamInfo {

@@ -4,15 +4,29 @@
 #include <glm/glm.hpp>
 
 namespace shimmer::shading {
+namespace {
+// The scene the GLSL's sceneWord() reads in C++ (set by ShadePixel).
+thread_local std::span<const glm::vec4> g_scene_words;
+}  // namespace
+
+#define SHIMMER_SCENE_WORDS
 namespace glsl_f32 {
 using real = float;
 #include "glsl_compat.h"
+vec4 sceneWord(int i) {
+  if (i < 0 || std::size_t(i) >= g_scene_words.size()) return vec4(0.0f);
+  return g_scene_words[std::size_t(i)];
+}
 #include "core.glsl"
 }  // namespace glsl_f32
 
 namespace glsl_f64 {
 using real = double;
 #include "glsl_compat.h"
+vec4 sceneWord(int i) {
+  if (i < 0 || std::size_t(i) >= g_scene_words.size()) return vec4(0.0);
+  return vec4(g_scene_words[std::size_t(i)]);
+}
 #include "core.glsl"
 }  // namespace glsl_f64
 
@@ -94,6 +108,50 @@ T GgxRectMeanStable(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> 
 SHIMMER_INSTANTIATE(float)
 SHIMMER_INSTANTIATE(double)
 #undef SHIMMER_INSTANTIATE
+
+PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc& camera, const LightDesc& light,
+                       const MaterialDesc& material, int variant, DerivativeSource derivatives,
+                       const Params<double>& params, glm::ivec2 px) {
+  using namespace glsl_f64;
+  g_scene_words = scene_words;
+  Camera c;
+  c.pos = camera.pos;
+  c.fwd = camera.fwd;
+  c.right = camera.right;
+  c.up = camera.up;
+  c.tanHalfFovY = camera.tan_half_fov_y;
+  c.aspect = double(camera.width) / double(camera.height);
+  c.size = glm::dvec2(camera.width, camera.height);
+  Light l;
+  l.type = static_cast<int>(light.type);
+  l.vec = light.vec;
+  l.radiance = light.radiance;
+  l.radius = light.radius;
+  Material m;
+  m.ndf = static_cast<int>(material.ndf);
+  m.alpha = material.alpha;
+  m.f0 = material.f0;
+  m.albedo = material.albedo;
+  VariantParams p;
+  p.fp_max = params.fp_max;
+  p.fp_min_cap = params.fp_min_cap;
+  p.sigma2 = params.sigma2;
+  p.kappa = params.kappa;
+  PixelResult r = renderPixelOracle(c, l, m, variant, static_cast<int>(derivatives), p, px);
+  g_scene_words = {};
+  PixelOracle o;
+  o.hit = r.s.prim >= 0;
+  o.prim = r.s.prim;
+  o.depth = r.s.t;
+  o.normal = r.s.n;
+  o.hpp = r.s.hpp;
+  o.specular = r.shade.specular;
+  o.diffuse = r.shade.diffuse;
+  o.alpha_eff = r.shade.alphaEff;
+  o.footprint = r.shade.footprint;
+  o.derivatives = {r.f.hpp, r.f.dhpp_dx, r.f.dhpp_dy, r.f.n, r.f.dn_dx, r.f.dn_dy, r.f.dng_dx, r.f.dng_dy};
+  return o;
+}
 
 bool CatalogueMatchesGlsl() {
   using namespace glsl_f64;

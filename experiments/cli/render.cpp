@@ -1,0 +1,155 @@
+// `shimmer render`: renders a camera-motion sequence (or its reference) with
+// the Vulkan compute renderer into EXR frames and a sequence.json.
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "renderer.h"
+#include "scene.h"
+#include "vk.h"
+
+namespace shimmer::cli {
+
+namespace {
+
+struct RenderOptions {
+  std::string scene = "sphere-field";
+  std::string material;
+  std::string camera = "orbit";
+  std::string variant = "none";
+  std::string variant_file;
+  std::vector<std::string> params;
+  std::string derivatives = "quad";
+  int frames = 16;
+  std::vector<int> size{96, 96};
+  double fps = 30;
+  int reference_spp = 0;
+  double reference_tolerance = 0;
+  int max_rounds = 64;
+  std::string device;
+  std::string out = "shimmer-render";
+  bool list_devices = false;
+  std::string preview;
+};
+
+std::pair<std::string, double> ParseParam(const std::string& text) {
+  auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == text.size())
+    throw UsageError("--param expects name=value, got '" + text + "'");
+  std::string value = text.substr(eq + 1);
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(value, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != value.size()) throw UsageError("--param " + text.substr(0, eq) + ": '" + value + "' is not a number");
+  return {text.substr(0, eq), v};
+}
+
+void PrintProgress(int done, int total) {
+  const int width = 30;
+  int filled = total > 0 ? done * width / total : width;
+  std::fprintf(stderr, "\r[%.*s%*s] %d/%d frames", filled, "##############################", width - filled, "",
+               done, total);
+  if (done == total) std::fprintf(stderr, "\n");
+  std::fflush(stderr);
+}
+
+void Run(const RenderOptions& o) {
+  if (o.list_devices) {
+    std::string error;
+    auto devices = vk::Context::ListDevices(&error);
+    if (!error.empty()) throw std::runtime_error(error);
+    for (const auto& d : devices)
+      std::printf("%s (%s, subgroup %u%s)\n", d.name.c_str(), d.type.c_str(), d.subgroup_size,
+                  d.quad_ops_in_compute ? ", quad ops" : "");
+    return;
+  }
+  render::RenderSettings s;
+  auto scene = scene::LoadScene(o.scene);
+  if (!scene.ok()) throw UsageError(scene.error);
+  s.scene = scene.value;
+  s.material = s.scene.material;
+  if (!o.material.empty()) {
+    auto m = scene::ParseMaterial(o.material, s.scene.material);
+    if (!m.ok()) throw UsageError(m.error);
+    s.material = m.value;
+  }
+  s.camera = o.camera;
+  s.variant = o.variant;
+  s.variant_file = o.variant_file;
+  for (const std::string& p : o.params) s.param_overrides.push_back(ParseParam(p));
+  if (o.derivatives == "quad" || o.derivatives == "quad-fine") s.derivatives = shading::DerivativeSource::kQuadFine;
+  else if (o.derivatives == "quad-coarse") s.derivatives = shading::DerivativeSource::kQuadCoarse;
+  else if (o.derivatives == "analytic") s.derivatives = shading::DerivativeSource::kAnalytic;
+  else throw UsageError("--derivatives must be quad, quad-fine, quad-coarse or analytic, got '" + o.derivatives + "'");
+  s.frames = o.frames;
+  s.width = o.size[0];
+  s.height = o.size[1];
+  s.fps = o.fps;
+  s.reference_spp = o.reference_spp;
+  s.reference_tolerance = o.reference_tolerance;
+  if (o.reference_tolerance > 0 && o.reference_spp == 0) s.reference_spp = 4;
+  s.max_rounds = o.max_rounds;
+  s.device = o.device;
+  s.preview_png = o.preview;
+  const bool tty = isatty(fileno(stderr));
+  std::string error = render::RenderSequence(s, o.out, tty ? PrintProgress : std::function<void(int, int)>());
+  if (!error.empty()) throw std::runtime_error(error);
+
+  std::ifstream in(o.out + "/sequence.json");
+  nlohmann::json seq = nlohmann::json::parse(in, nullptr, false);
+  double gpu = 0;
+  for (const auto& f : seq["frames"]) gpu += f["gpu_ms"].get<double>();
+  std::printf("%d frames of %s (%s, %s) at %dx%d in %s: %.2f ms/frame on %s\n", s.frames, s.scene.name.c_str(),
+              s.camera.c_str(), seq["variant"].get<std::string>().c_str(), s.width, s.height, o.out.c_str(),
+              gpu / s.frames, seq["device"].get<std::string>().c_str());
+}
+
+}  // namespace
+
+void AddRenderCommand(CLI::App& app) {
+  auto o = std::make_shared<RenderOptions>();
+  CLI::App* cmd = app.add_subcommand("render", "Render a camera-motion sequence to EXR frames (Vulkan compute)");
+  cmd->footer(
+      "Material spec: NDF:ALPHA[,ALPHA_Y][,f0=V|R/G/B][,albedo=V|R/G/B]\n"
+      "  e.g. ggx:0.05   beckmann:0.02,0.1   ggx:0.1,f0=0.9/0.6/0.3,albedo=0\n"
+      "Scenes: sphere, sphere-field, wires, bumpy-plane, or a JSON file (docs/renderer.md).\n"
+      "Camera paths: orbit, pan, dolly, vr-jitter, static.\n"
+      "Output: DIR/frame_NNNN.exr (R,G,B, specular.*, diffuse.*, motion.X/Y, depth.Z, normal.*,\n"
+      "  roughness.A, footprint.X/Y, stderr.Y for the reference) and DIR/sequence.json.");
+  cmd->add_option("--scene", o->scene, "Built-in scene name or JSON scene file")->capture_default_str();
+  cmd->add_option("--material", o->material, "Material spec (default: the scene's)");
+  cmd->add_option("--camera", o->camera, "Camera path")->capture_default_str();
+  cmd->add_option("--variant", o->variant, "Filter variant (`shimmer variants`) or supersample-N")
+      ->capture_default_str();
+  cmd->add_option("--variant-file", o->variant_file,
+                  "GLSL file defining FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, "
+                  "VariantParams p); compiled at run time");
+  cmd->add_option("--param", o->params, "Variant parameter name=value (repeatable)");
+  cmd->add_option("--derivatives", o->derivatives, "quad (= quad-fine), quad-coarse or analytic")
+      ->capture_default_str();
+  cmd->add_option("--frames", o->frames, "Number of frames")->capture_default_str();
+  cmd->add_option("--size", o->size, "Width and height in pixels")->expected(2)->capture_default_str();
+  cmd->add_option("--fps", o->fps, "Frames per second (camera time step; metadata)")->capture_default_str();
+  auto spp = cmd->add_option("--reference-spp", o->reference_spp,
+                             "Render the reference: variant none with N x N stratified samples per pixel");
+  cmd->add_option("--reference-tolerance", o->reference_tolerance,
+                  "Adaptive reference: rounds of N x N samples (N = --reference-spp, default 4) until the "
+                  "standard error is below T times max(luminance, 0.01)");
+  cmd->add_option("--max-rounds", o->max_rounds, "Adaptive reference: most rounds per frame")->capture_default_str();
+  cmd->add_option("--device", o->device, "Vulkan device (substring of its name)");
+  cmd->add_option("--preview", o->preview, "Also write a tone-mapped PNG of frame 0 to this file");
+  cmd->add_flag("--list-devices", o->list_devices, "List Vulkan devices and exit");
+  cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
+  (void)spp;
+  cmd->callback([o] { Run(*o); });
+}
+
+}  // namespace shimmer::cli

@@ -1,0 +1,582 @@
+#include "renderer.h"
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "spirv_compiler.h"
+#include "vk.h"
+
+namespace shimmer::render {
+
+namespace embedded {
+std::span<const std::pair<std::string_view, std::string_view>> Sources();
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double MsSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+// The kernel's storage buffer 0 (std430; render.comp FrameBuf).
+struct GpuCamera {
+  float pos_tan[4], fwd_aspect[4], right[4], up[4];
+};
+struct GpuFrame {
+  GpuCamera cam, prev;
+  float light_a[4], light_b[4], mat_a[4], mat_f0[4], mat_albedo[4];
+  std::int32_t size[4];
+};
+struct GpuPush {
+  float params[4];
+  std::int32_t round[4];
+  float target[4];
+};
+
+GpuCamera ToGpu(const shading::CameraDesc& c) {
+  auto f = [](float* out, glm::dvec3 v, double w) {
+    out[0] = float(v.x), out[1] = float(v.y), out[2] = float(v.z), out[3] = float(w);
+  };
+  GpuCamera g;
+  f(g.pos_tan, c.pos, c.tan_half_fov_y);
+  f(g.fwd_aspect, c.fwd, double(c.width) / double(c.height));
+  f(g.right, c.right, 0);
+  f(g.up, c.up, 0);
+  return g;
+}
+
+// SPIR-V per user-variant text, for the life of the process: built-in
+// variants differ only in specialization constants and share one module.
+struct SpirvCache {
+  std::mutex mutex;
+  std::map<std::string, std::vector<std::uint32_t>> modules;
+};
+SpirvCache& Cache() {
+  static SpirvCache cache;
+  return cache;
+}
+
+std::string KernelText(bool user_variant) {
+  std::string text;
+  for (const auto& [name, body] : embedded::Sources())
+    if (name == "render.comp") text = std::string(body);
+  if (user_variant) {
+    // After #version (line 1): keep the kernel's own line numbers after the define.
+    auto eol = text.find('\n');
+    text.insert(eol + 1, "#define SHIMMER_USER_VARIANT\n#line 2\n");
+  }
+  return text;
+}
+
+std::string ReadFile(const std::string& path, bool* ok) {
+  std::ifstream in(path);
+  *ok = static_cast<bool>(in);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::pair<ResolvedVariant, std::string> ResolveVariant(const RenderSettings& s) {
+  ResolvedVariant v;
+  if (s.reference_spp < 0 || s.reference_spp > 64) return {v, "--reference-spp must be in 1..64 (N x N samples)"};
+  if (s.reference_tolerance < 0 || !std::isfinite(s.reference_tolerance))
+    return {v, "--reference-tolerance must be a finite value > 0"};
+  bool reference = s.reference_spp > 0 || s.reference_tolerance > 0;
+  if (!s.variant_file.empty()) {
+    if (reference) return {v, "a reference renders variant none; drop --variant-file"};
+    v.name = "user:" + std::filesystem::path(s.variant_file).filename().string();
+    v.id = 0;
+    for (const auto& [k, x] : s.param_overrides) {
+      if (k == "fp_max") v.params.fp_max = x;
+      else if (k == "fp_min_cap") v.params.fp_min_cap = x;
+      else if (k == "sigma2") v.params.sigma2 = x;
+      else if (k == "kappa") v.params.kappa = x;
+      else return {v, "a user variant takes the parameters fp_max, fp_min_cap, sigma2, kappa; got '" + k + "'"};
+      v.shown_params.push_back({k, x});
+    }
+    return {v, ""};
+  }
+  std::string name = s.variant;
+  int spp_n = 1;
+  if (name.rfind("supersample-", 0) == 0) {
+    std::string n = name.substr(12);
+    std::size_t used = 0;
+    try {
+      spp_n = std::stoi(n, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != n.size() || spp_n < 1 || spp_n > 64)
+      return {v, "variant '" + name + "': supersample-N needs N in 1..64"};
+    if (reference) return {v, "a reference is already supersampled; use --variant none with --reference-spp"};
+    name = "none";
+  }
+  const shading::VariantInfo* info = shading::FindVariant(name);
+  if (!info) return {v, "unknown variant '" + s.variant + "' (see `shimmer variants`, or supersample-N)"};
+  if (reference && info->id != 0) return {v, "a reference renders variant none, not " + s.variant};
+  if (info->ggx_only && s.material.ndf != shading::Ndf::kGgx)
+    return {v, "variant " + s.variant + " filters GGX only; use a ggx material"};
+  shading::ResolvedParams rp = shading::ResolveParams(*info, s.param_overrides);
+  if (!rp.error.empty()) return {v, rp.error};
+  v.name = s.variant;
+  v.id = info->id;
+  v.params = rp.values;
+  for (const shading::ParamInfo& p : info->params) {
+    double x = p.name == "fp_max" ? rp.values.fp_max
+               : p.name == "fp_min_cap" ? rp.values.fp_min_cap
+               : p.name == "sigma2" ? rp.values.sigma2
+                                     : rp.values.kappa;
+    v.shown_params.push_back({std::string(p.name), x});
+  }
+  v.reference = reference;
+  v.spp_n = reference ? (s.reference_spp > 0 ? s.reference_spp : 4) : spp_n;
+  return {v, ""};
+}
+
+}  // namespace
+
+std::vector<ExrChannel> ExrChannels(bool with_stderr) {
+  std::vector<ExrChannel> c = {
+      {"R", kBeautyR},          {"G", kBeautyR + 1},          {"B", kBeautyR + 2},
+      {"specular.R", kSpecularR}, {"specular.G", kSpecularR + 1}, {"specular.B", kSpecularR + 2},
+      {"diffuse.R", kDiffuseR},   {"diffuse.G", kDiffuseR + 1},   {"diffuse.B", kDiffuseR + 2},
+      {"motion.X", kMotionX},     {"motion.Y", kMotionX + 1},     {"depth.Z", kDepth},
+      {"normal.X", kNormalX},     {"normal.Y", kNormalX + 1},     {"normal.Z", kNormalX + 2},
+      {"roughness.A", kRoughness}, {"footprint.X", kFootprintX},  {"footprint.Y", kFootprintX + 1},
+  };
+  if (with_stderr) c.push_back({"stderr.Y", kStderr});
+  return c;
+}
+
+std::string SourceRevision() { return SHIMMER_GIT_REVISION; }
+
+struct Renderer::Impl {
+  RenderSettings settings;
+  ResolvedVariant variant;
+  Timings timings;
+  std::vector<glm::vec4> words;
+  std::unique_ptr<vk::Context> ctx;
+  std::unique_ptr<vk::ComputePipeline> pipeline;
+  std::unique_ptr<vk::Buffer> frame_buf, scene_buf, image_buf, counter_buf;
+
+  std::string Dispatch(const GpuPush& push, double* gpu_ms) {
+    vk::Buffer* bufs[] = {frame_buf.get(), scene_buf.get(), image_buf.get(), counter_buf.get()};
+    auto bytes = std::as_bytes(std::span<const GpuPush>(&push, 1));
+    auto groups = [](int n) { return std::uint32_t((n + 7) / 8); };
+    vk::DispatchResult r = ctx->Dispatch(*pipeline, bufs, bytes, groups(settings.width), groups(settings.height));
+    *gpu_ms += r.gpu_ms;
+    return r.error;
+  }
+};
+
+Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
+Renderer::~Renderer() = default;
+const RenderSettings& Renderer::settings() const { return impl_->settings; }
+const ResolvedVariant& Renderer::variant() const { return impl_->variant; }
+const Timings& Renderer::timings() const { return impl_->timings; }
+std::string Renderer::device_name() const { return impl_->ctx->device().name; }
+std::span<const glm::vec4> Renderer::scene_words() const { return impl_->words; }
+
+shading::CameraDesc Renderer::camera(int frame) const {
+  const RenderSettings& s = impl_->settings;
+  return scene::CameraAt(s.camera, s.scene.rig, frame, s.fps, s.width, s.height);
+}
+
+std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderSettings& settings) {
+  using Out = std::pair<std::unique_ptr<Renderer>, std::string>;
+  std::unique_ptr<Renderer> r(new Renderer());
+  Impl& im = *r->impl_;
+  im.settings = settings;
+  if (settings.width < 1 || settings.height < 1 || settings.width > 16384 || settings.height > 16384)
+    return Out{nullptr, "--size must be two values in 1..16384"};
+  if (settings.frames < 1) return Out{nullptr, "--frames must be >= 1"};
+  if (!(settings.fps > 0) || !std::isfinite(settings.fps)) return Out{nullptr, "--fps must be > 0"};
+  if (!scene::IsCameraPath(settings.camera)) {
+    std::string list;
+    for (auto n : scene::CameraPathNames()) list += (list.empty() ? "" : ", ") + std::string(n);
+    return Out{nullptr, "unknown camera path '" + settings.camera + "' (" + list + ")"};
+  }
+  auto [variant, verr] = ResolveVariant(settings);
+  if (!verr.empty()) return Out{nullptr, verr};
+  im.variant = variant;
+
+  // Kernel source first: a compile error is reported before touching Vulkan.
+  std::string user_text;
+  std::vector<shading::GlslFile> extra;
+  if (!settings.variant_file.empty()) {
+    bool ok = false;
+    user_text = ReadFile(settings.variant_file, &ok);
+    if (!ok) return Out{nullptr, "cannot read variant file '" + settings.variant_file + "'"};
+    extra.push_back({"user_variant.glsl", user_text});
+  }
+  std::vector<std::uint32_t> spirv;
+  {
+    auto t0 = Clock::now();
+    std::lock_guard<std::mutex> lock(Cache().mutex);
+    const std::string key = settings.variant_file.empty() ? std::string() : "user:" + user_text;
+    auto it = Cache().modules.find(key);
+    if (it == Cache().modules.end()) {
+      shading::SpirvResult compiled = shading::CompileCompute({"render.comp", KernelText(!extra.empty())}, extra);
+      if (!compiled.ok()) {
+        std::string log = compiled.error;
+        // Name the user's file as the user gave it.
+        for (std::size_t p = 0; (p = log.find("user_variant.glsl", p)) != std::string::npos;) {
+          log.replace(p, 17, settings.variant_file);
+          p += settings.variant_file.size();
+        }
+        return Out{nullptr, "shader compile failed:\n" + log};
+      }
+      it = Cache().modules.emplace(key, std::move(compiled.words)).first;
+      im.timings.compile_ms = MsSince(t0);
+    }
+    spirv = it->second;
+  }
+
+  vk::ContextOptions options;
+  options.device_name = settings.device;
+#ifndef NDEBUG
+  options.validation = true;
+#endif
+  vk::Expected<vk::Context> ctx = vk::Context::Create(options);
+  if (!ctx) return Out{nullptr, ctx.error};
+  im.ctx = std::move(ctx.value);
+  const vk::DeviceInfo& dev = im.ctx->device();
+  if (variant.spp_n == 1 && settings.derivatives != shading::DerivativeSource::kAnalytic &&
+      (!dev.quad_ops_in_compute || dev.subgroup_size < 4))
+    return Out{nullptr, "device '" + dev.name +
+                            "' has no subgroup quad operations in compute shaders; use --derivatives analytic"};
+
+  const std::int32_t spec[] = {variant.id, static_cast<std::int32_t>(settings.derivatives), variant.spp_n};
+  auto t1 = Clock::now();
+  auto pipe = im.ctx->CreatePipeline(spirv, spec, 4, sizeof(GpuPush));
+  if (!pipe) return Out{nullptr, pipe.error};
+  im.pipeline = std::move(pipe.value);
+  im.timings.pipeline_ms = MsSince(t1);
+
+  im.words = scene::PackScene(settings.scene);
+  const std::size_t pixels = std::size_t(settings.width) * settings.height;
+  auto make = [&im](std::size_t bytes, std::unique_ptr<vk::Buffer>* out) {
+    auto b = im.ctx->CreateBuffer(bytes);
+    if (!b) return b.error;
+    *out = std::move(b.value);
+    return std::string();
+  };
+  for (auto [bytes, slot] : {std::pair{sizeof(GpuFrame), &im.frame_buf},
+                             std::pair{im.words.size() * sizeof(glm::vec4), &im.scene_buf},
+                             std::pair{pixels * kChannelCount * sizeof(float), &im.image_buf},
+                             std::pair{std::size_t(16), &im.counter_buf}}) {
+    std::string e = make(bytes, slot);
+    if (!e.empty()) return Out{nullptr, e};
+  }
+  std::memcpy(im.scene_buf->data(), im.words.data(), im.words.size() * sizeof(glm::vec4));
+
+  // Warm-up: the first dispatch includes lavapipe's JIT; keep it out of frame times.
+  auto t2 = Clock::now();
+  GpuFrame empty{};
+  empty.size[0] = 0;
+  empty.size[1] = 0;
+  std::memcpy(im.frame_buf->data(), &empty, sizeof empty);
+  GpuPush push{};
+  vk::Buffer* bufs[] = {im.frame_buf.get(), im.scene_buf.get(), im.image_buf.get(), im.counter_buf.get()};
+  vk::DispatchResult warm =
+      im.ctx->Dispatch(*im.pipeline, bufs, std::as_bytes(std::span<const GpuPush>(&push, 1)), 1, 1);
+  if (!warm.error.empty()) return Out{nullptr, warm.error};
+  im.timings.jit_ms = MsSince(t2);
+  return Out{std::move(r), ""};
+}
+
+Renderer::Result Renderer::RenderFrame(int index) {
+  Impl& im = *impl_;
+  const RenderSettings& s = im.settings;
+  Result result;
+  GpuFrame f{};
+  f.cam = ToGpu(camera(index));
+  f.prev = ToGpu(camera(index - 1));
+  const shading::LightDesc& l = s.scene.light;
+  auto put = [](float* out, glm::dvec3 v, double w) {
+    out[0] = float(v.x), out[1] = float(v.y), out[2] = float(v.z), out[3] = float(w);
+  };
+  put(f.light_a, l.vec, double(static_cast<int>(l.type)));
+  put(f.light_b, l.radiance, l.radius);
+  put(f.mat_a, {s.material.alpha.x, s.material.alpha.y, double(static_cast<int>(s.material.ndf))}, 0);
+  put(f.mat_f0, s.material.f0, 0);
+  put(f.mat_albedo, s.material.albedo, 0);
+  f.size[0] = s.width;
+  f.size[1] = s.height;
+  std::memcpy(im.frame_buf->data(), &f, sizeof f);
+
+  GpuPush push{};
+  const auto& p = im.variant.params;
+  push.params[0] = float(p.fp_max), push.params[1] = float(p.fp_min_cap);
+  push.params[2] = float(p.sigma2), push.params[3] = float(p.kappa);
+  push.round[1] = index;
+  const bool adaptive = im.variant.reference && s.reference_tolerance > 0;
+  push.target[0] = adaptive ? float(s.reference_tolerance) : 0.0f;
+  push.target[1] = float(kReferenceLuminanceFloor);
+  const int rounds = adaptive ? std::max(1, s.max_rounds) : 1;
+  Frame& frame = result.frame;
+  frame.rounds = 0;
+  for (int round = 0; round < rounds; ++round) {
+    push.round[0] = round;
+    std::memset(im.counter_buf->data(), 0, 16);
+    result.error = im.Dispatch(push, &frame.gpu_ms);
+    if (!result.error.empty()) return result;
+    frame.rounds = round + 1;
+    std::uint32_t unconverged = 0;
+    std::memcpy(&unconverged, im.counter_buf->data(), sizeof unconverged);
+    if (unconverged == 0) break;
+  }
+  auto t0 = Clock::now();
+  frame.width = s.width;
+  frame.height = s.height;
+  const std::size_t n = std::size_t(s.width) * s.height * kChannelCount;
+  frame.planes.resize(n);
+  std::memcpy(frame.planes.data(), im.image_buf->data(), n * sizeof(float));
+  frame.readback_ms = MsSince(t0);
+  double total = 0;
+  const std::size_t pixels = std::size_t(s.width) * s.height;
+  for (std::size_t i = 0; i < pixels; ++i) total += frame.planes[kSampleCount * pixels + i];
+  frame.mean_spp = total / double(pixels);
+  return result;
+}
+
+std::string WriteExr(const std::string& path, const Frame& frame, bool with_stderr) {
+  const std::string tmp = path + ".tmp";
+  try {
+    Imf::Header header(frame.width, frame.height);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    Imf::FrameBuffer fb;
+    const std::size_t plane = std::size_t(frame.width) * frame.height;
+    for (const ExrChannel& c : ExrChannels(with_stderr)) {
+      header.channels().insert(c.name, Imf::Channel(Imf::FLOAT));
+      char* base = reinterpret_cast<char*>(const_cast<float*>(frame.planes.data() + c.plane * plane));
+      fb.insert(c.name, Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * frame.width));
+    }
+    Imf::OutputFile out(tmp.c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(frame.height);
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    return "cannot write " + path + ": " + e.what();
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    return "cannot write " + path + ": " + ec.message();
+  }
+  return "";
+}
+
+std::string WritePreviewPng(const std::string& path, const Frame& frame) {
+  cv::Mat img(frame.height, frame.width, CV_8UC3);
+  const std::size_t plane = std::size_t(frame.width) * frame.height;
+  auto encode = [](float x) {
+    double v = std::max(0.0, double(x));
+    v = v / (1.0 + v);
+    v = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+    return cv::saturate_cast<unsigned char>(v * 255.0 + 0.5);
+  };
+  for (int y = 0; y < frame.height; ++y)
+    for (int x = 0; x < frame.width; ++x) {
+      std::size_t i = std::size_t(y) * frame.width + x;
+      img.at<cv::Vec3b>(y, x) = {encode(frame.planes[(kBeautyR + 2) * plane + i]),
+                                 encode(frame.planes[(kBeautyR + 1) * plane + i]),
+                                 encode(frame.planes[kBeautyR * plane + i])};
+    }
+  try {
+    if (!cv::imwrite(path, img)) return "cannot write " + path;
+  } catch (const cv::Exception& e) {
+    return "cannot write " + path + ": " + e.what();
+  }
+  return "";
+}
+
+namespace {
+
+std::string WriteJsonAtomically(const std::string& path, const nlohmann::json& j) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) return "cannot write " + path + " (is the output directory writable?)";
+    out << j.dump(2) << "\n";
+    if (!out) return "cannot write " + path;
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) return "cannot write " + path + ": " + ec.message();
+  return "";
+}
+
+// EXR writing on a worker thread, at most two frames queued.
+class FrameWriter {
+ public:
+  explicit FrameWriter(bool with_stderr) : with_stderr_(with_stderr), thread_([this] { Loop(); }) {}
+  ~FrameWriter() { Finish(); }
+
+  void Push(std::string path, Frame frame) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    space_.wait(lock, [this] { return queue_.size() < 2; });
+    queue_.push_back({std::move(path), std::move(frame)});
+    ready_.notify_one();
+  }
+  // Waits for every queued frame; returns the first error.
+  std::string Finish() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+      ready_.notify_one();
+    }
+    if (thread_.joinable()) thread_.join();
+    return error_;
+  }
+  double write_ms() const { return write_ms_; }
+
+ private:
+  void Loop() {
+    for (;;) {
+      std::pair<std::string, Frame> job;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        ready_.wait(lock, [this] { return done_ || !queue_.empty(); });
+        if (queue_.empty()) return;
+        job = std::move(queue_.front());
+        queue_.pop_front();
+        space_.notify_one();
+      }
+      auto t0 = Clock::now();
+      std::string e = error_.empty() ? WriteExr(job.first, job.second, with_stderr_) : "";
+      write_ms_ += MsSince(t0);
+      if (!e.empty() && error_.empty()) error_ = e;
+    }
+  }
+
+  bool with_stderr_;
+  std::mutex mutex_;
+  std::condition_variable ready_, space_;
+  std::deque<std::pair<std::string, Frame>> queue_;
+  bool done_ = false;
+  std::string error_;
+  double write_ms_ = 0;
+  std::thread thread_;
+};
+
+std::string FrameName(int i) {
+  char name[32];
+  std::snprintf(name, sizeof name, "frame_%04d.exr", i);
+  return name;
+}
+
+}  // namespace
+
+std::string RenderSequence(const RenderSettings& settings, const std::string& out_dir,
+                           const std::function<void(int, int)>& progress) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec || !fs::is_directory(out_dir))
+    return "cannot create output directory '" + out_dir + "'" + (ec ? ": " + ec.message() : "");
+  const std::string seq_path = (fs::path(out_dir) / "sequence.json").string();
+  // Fail on an unwritable directory before any rendering.
+  {
+    std::string e = WriteJsonAtomically(seq_path + ".probe", nlohmann::json::object());
+    fs::remove(seq_path + ".probe", ec);
+    if (!e.empty()) return "output directory '" + out_dir + "' is not writable";
+  }
+  auto [renderer, error] = Renderer::Create(settings);
+  if (!renderer) return error;
+  const ResolvedVariant& v = renderer->variant();
+
+  nlohmann::json params = nlohmann::json::object();
+  for (const auto& [k, x] : v.shown_params) params[k] = x;
+  const auto& rig = settings.scene.rig;
+  static const char* kDerivNames[] = {"analytic", "quad-fine", "quad-coarse"};
+  nlohmann::json seq = {
+      {"status", "running"},
+      {"scene", settings.scene.name},
+      {"material", scene::MaterialSpec(settings.material)},
+      {"light", settings.scene.light.type == shading::LightType::kDirectional ? "directional" : "sphere"},
+      {"camera",
+       {{"path", settings.camera},
+        {"target", {rig.target.x, rig.target.y, rig.target.z}},
+        {"distance", rig.distance},
+        {"elevation_deg", rig.elevation_deg},
+        {"azimuth_deg", rig.azimuth_deg},
+        {"fov_y_deg", rig.fov_y_deg}}},
+      {"variant", v.name},
+      {"params", params},
+      {"derivatives", v.spp_n > 1 ? "analytic" : kDerivNames[static_cast<int>(settings.derivatives)]},
+      {"width", settings.width},
+      {"height", settings.height},
+      {"fps", settings.fps},
+      {"frame_count", settings.frames},
+      {"spp", v.spp_n * v.spp_n},
+      {"reference", v.reference},
+      {"device", renderer->device_name()},
+      {"revision", SourceRevision()},
+      {"timings_ms",
+       {{"shader_compile", renderer->timings().compile_ms},
+        {"pipeline_create", renderer->timings().pipeline_ms},
+        {"first_dispatch_jit", renderer->timings().jit_ms}}},
+      {"frames", nlohmann::json::array()},
+  };
+  if (v.reference) {
+    seq["reference_spp"] = v.spp_n;
+    seq["reference_tolerance"] = settings.reference_tolerance;
+    seq["reference_luminance_floor"] = kReferenceLuminanceFloor;
+  }
+  if (!settings.variant_file.empty()) seq["variant_file"] = settings.variant_file;
+  if (std::string e = WriteJsonAtomically(seq_path, seq); !e.empty()) return e;
+
+  FrameWriter writer(v.reference);
+  double render_ms = 0, readback_ms = 0;
+  for (int i = 0; i < settings.frames; ++i) {
+    auto t0 = Clock::now();
+    Renderer::Result r = renderer->RenderFrame(i);
+    render_ms += MsSince(t0);
+    if (!r.error.empty()) {
+      writer.Finish();
+      return "frame " + std::to_string(i) + ": " + r.error;
+    }
+    readback_ms += r.frame.readback_ms;
+    nlohmann::json fj = {{"file", FrameName(i)}, {"gpu_ms", r.frame.gpu_ms}, {"time_s", i / settings.fps}};
+    if (v.reference) {
+      fj["mean_spp"] = r.frame.mean_spp;
+      fj["rounds"] = r.frame.rounds;
+    }
+    seq["frames"].push_back(fj);
+    if (i == 0 && !settings.preview_png.empty()) {
+      if (std::string e = WritePreviewPng(settings.preview_png, r.frame); !e.empty()) {
+        writer.Finish();
+        return e;
+      }
+    }
+    writer.Push((fs::path(out_dir) / FrameName(i)).string(), std::move(r.frame));
+    if (progress) progress(i + 1, settings.frames);
+  }
+  if (std::string e = writer.Finish(); !e.empty()) return e;
+  seq["status"] = "complete";
+  seq["timings_ms"]["render_wall"] = render_ms;
+  seq["timings_ms"]["readback"] = readback_ms;
+  seq["timings_ms"]["exr_write"] = writer.write_ms();
+  return WriteJsonAtomically(seq_path, seq);
+}
+
+}  // namespace shimmer::render

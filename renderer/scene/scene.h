@@ -1,0 +1,72 @@
+// Scenes of analytic primitives (built in or from a small JSON file), the
+// --material spec, camera paths, and the packed form the kernel reads.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "shading.h"
+
+namespace shimmer::scene {
+
+struct Primitive {
+  enum class Type { kSphere = 0, kCapsule = 1, kPlane = 2 };
+  Type type = Type::kSphere;
+  glm::dvec3 a{0};  // sphere centre, capsule end
+  glm::dvec3 b{0};  // capsule end
+  double radius = 1;  // sphere, capsule; plane: height y
+  double bump_slope = 0;
+  double bump_frequency = 0;
+};
+
+// Where the camera paths start: looking at `target` from `distance`, at
+// `elevation_deg` above the horizon and `azimuth_deg` around +y.
+struct CameraRig {
+  glm::dvec3 target{0};
+  double distance = 4;
+  double elevation_deg = 15;
+  double azimuth_deg = 0;
+  double fov_y_deg = 30;
+};
+
+struct Scene {
+  std::string name;
+  std::vector<Primitive> primitives;
+  shading::LightDesc light;
+  shading::MaterialDesc material;  // the default; --material overrides it
+  CameraRig rig;
+};
+
+template <class T>
+struct Parsed {
+  T value{};
+  std::string error;  // empty when fine
+  bool ok() const { return error.empty(); }
+};
+
+std::vector<std::string_view> BuiltinSceneNames();
+// A built-in name, or else a path to a JSON scene file.
+Parsed<Scene> LoadScene(const std::string& name_or_file);
+Parsed<Scene> ParseSceneJson(std::string_view text, const std::string& source);
+
+// NDF:ALPHA[,ALPHA_Y][,f0=V|R/G/B][,albedo=V|R/G/B], e.g. "ggx:0.05",
+// "beckmann:0.02,0.1,f0=0.9/0.6/0.3,albedo=0". Unset fields keep `base`'s.
+Parsed<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading::MaterialDesc& base);
+std::string MaterialSpec(const shading::MaterialDesc& m);
+
+// The words of scene.glsl's layout, BVH included.
+std::vector<glm::vec4> PackScene(const Scene& scene);
+
+// --- camera paths -------------------------------------------------------------
+
+std::vector<std::string_view> CameraPathNames();
+bool IsCameraPath(std::string_view name);
+// The camera of `path` at time `frame / fps` seconds; deterministic.
+shading::CameraDesc CameraAt(std::string_view path, const CameraRig& rig, int frame, double fps, int width,
+                             int height);
+
+}  // namespace shimmer::scene

@@ -1,0 +1,253 @@
+#version 460
+// The renderer's kernel: one dispatch shades every pixel of one frame (or one
+// round of reference samples). Only the Vulkan-specific parts live here:
+// invocation -> pixel mapping, the 2x2 quad exchange for quad derivatives, the
+// sub-pixel sample loop of the reference, buffer writes. Everything a pixel
+// computes is in the shading core (scene.glsl, pixel.glsl), which the CPU
+// oracle runs in double.
+#extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_quad : require
+#define real float
+#define SHIMMER_SCENE_WORDS
+
+// 64 invocations = 16 quads of 2x2 pixels = an 8x8 pixel tile.
+layout(local_size_x = 64) in;
+
+layout(constant_id = 0) const int VARIANT_ID = 0;
+layout(constant_id = 1) const int DERIV_MODE = 0;  // DERIV_* of pixel.glsl
+layout(constant_id = 2) const int SPP_N = 1;       // N x N stratified sub-pixel samples; 1 = pixel centre
+
+struct CameraGpu {
+  vec4 posTan;      // position, tan(fov_y / 2)
+  vec4 fwdAspect;   // forward, width / height
+  vec4 right;
+  vec4 up;
+};
+
+layout(std430, binding = 0) readonly buffer FrameBuf {
+  CameraGpu cam;
+  CameraGpu prevCam;
+  vec4 lightA;  // direction or centre, type
+  vec4 lightB;  // radiance or intensity, radius
+  vec4 matA;    // alpha x, alpha y, ndf
+  vec4 matF0;
+  vec4 matAlbedo;
+  ivec4 size;   // width, height
+} frame;
+layout(std430, binding = 1) readonly buffer SceneBuf { vec4 words[]; } scene;
+layout(std430, binding = 2) buffer ImageBuf { float values[]; } image;  // planar channels
+layout(std430, binding = 3) buffer CounterBuf { uint unconverged; } counter;
+
+layout(push_constant) uniform Push {
+  vec4 params;   // fp_max, fp_min_cap, sigma2, kappa
+  ivec4 round;   // reference round, frame index
+  vec4 target;   // relative standard error target (0: off), luminance floor
+} pc;
+
+vec4 sceneWord(int i) { return scene.words[i]; }
+
+#include "core.glsl"
+
+#ifdef SHIMMER_USER_VARIANT
+#include "user_variant.glsl"
+FilteredNdf runVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {
+  return userVariant(ndf, alpha, f, p);
+}
+#else
+FilteredNdf runVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {
+  return evalVariant(VARIANT_ID, ndf, alpha, f, p);
+}
+#endif
+
+// Channel planes of the image buffer (renderer/render/frame.h lists the same).
+const int CH_BEAUTY = 0, CH_SPECULAR = 3, CH_DIFFUSE = 6, CH_MOTION = 9, CH_DEPTH = 11, CH_NORMAL = 12,
+          CH_ROUGHNESS = 15, CH_FOOTPRINT = 16, CH_STDERR = 18, CH_COUNT = 19, CH_M2 = 20;
+
+Camera loadCamera(CameraGpu g) {
+  Camera c;
+  c.pos = g.posTan.xyz;
+  c.tanHalfFovY = g.posTan.w;
+  c.fwd = g.fwdAspect.xyz;
+  c.aspect = g.fwdAspect.w;
+  c.right = g.right.xyz;
+  c.up = g.up.xyz;
+  c.size = vec2(frame.size.xy);
+  return c;
+}
+
+int planeSize() { return frame.size.x * frame.size.y; }
+void put(int ch, int idx, float v) { image.values[ch * planeSize() + idx] = v; }
+float get(int ch, int idx) { return image.values[ch * planeSize() + idx]; }
+void put3(int ch, int idx, vec3 v) { put(ch, idx, v.x); put(ch + 1, idx, v.y); put(ch + 2, idx, v.z); }
+vec3 get3(int ch, int idx) { return vec3(get(ch, idx), get(ch + 1, idx), get(ch + 2, idx)); }
+float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
+
+// What a quad neighbour shares: the fields quadFootprint differences.
+SurfaceSample partialSample(int prim, vec2 hpp, vec3 n, vec3 ng) {
+  SurfaceSample s = missedSample();
+  s.prim = prim;
+  s.hpp = hpp;
+  s.n = n;
+  s.ng = ng;
+  return s;
+}
+
+SurfaceSample swapHorizontal(SurfaceSample s) {
+  return partialSample(subgroupQuadSwapHorizontal(s.prim), subgroupQuadSwapHorizontal(s.hpp),
+                       subgroupQuadSwapHorizontal(s.n), subgroupQuadSwapHorizontal(s.ng));
+}
+SurfaceSample swapVertical(SurfaceSample s) {
+  return partialSample(subgroupQuadSwapVertical(s.prim), subgroupQuadSwapVertical(s.hpp),
+                       subgroupQuadSwapVertical(s.n), subgroupQuadSwapVertical(s.ng));
+}
+// subgroupQuadBroadcast needs a constant lane, hence a macro.
+#define broadcastLane(s, L)                                                            \
+  partialSample(subgroupQuadBroadcast(s.prim, L), subgroupQuadBroadcast(s.hpp, L), \
+                subgroupQuadBroadcast(s.n, L), subgroupQuadBroadcast(s.ng, L))
+
+void writeAovs(int idx, ivec2 px, SurfaceSample s, PixelShade sh, Camera prev) {
+  vec2 motion = vec2(0.0);
+  if (s.prim >= 0) motion = projectToPixel(prev, s.p) - pixelCentre(px);
+  put(CH_MOTION, idx, motion.x);
+  put(CH_MOTION + 1, idx, motion.y);
+  put(CH_DEPTH, idx, s.t);
+  put3(CH_NORMAL, idx, s.n);
+  put(CH_ROUGHNESS, idx, sqrt(sh.alphaEff.x * sh.alphaEff.y));
+  put(CH_FOOTPRINT, idx, sh.footprint.x);
+  put(CH_FOOTPRINT + 1, idx, sh.footprint.y);
+}
+
+uint pcgHash(uint v) {
+  uint state = v * 747796405u + 2891336453u;
+  uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+  return (word >> 22u) ^ word;
+}
+
+vec2 sampleJitter(ivec2 px, int s) {
+  uint h = pcgHash(uint(px.x) + pcgHash(uint(px.y) + pcgHash(uint(s) + pcgHash(uint(pc.round.x) +
+               pcgHash(uint(pc.round.y))))));
+  uint h2 = pcgHash(h);
+  return vec2(float(h >> 8), float(h2 >> 8)) * (1.0 / 16777216.0);
+}
+
+void main() {
+  uint lin = gl_SubgroupID * gl_SubgroupSize + gl_SubgroupInvocationID;
+  uint quad = lin >> 2u;
+  uint lane = lin & 3u;
+  ivec2 px = ivec2(gl_WorkGroupID.xy) * 8 +
+             ivec2(int((quad & 3u) * 2u + (lane & 1u)), int((quad >> 2u) * 2u + (lane >> 1u)));
+  bool inside = px.x < frame.size.x && px.y < frame.size.y;
+  int idx = px.y * frame.size.x + px.x;
+
+  Camera c = loadCamera(frame.cam);
+  Camera prev = loadCamera(frame.prevCam);
+  Light light;
+  light.type = int(frame.lightA.w);
+  light.vec = frame.lightA.xyz;
+  light.radiance = frame.lightB.xyz;
+  light.radius = frame.lightB.w;
+  Material m;
+  m.ndf = int(frame.matA.z);
+  m.alpha = frame.matA.xy;
+  m.f0 = frame.matF0.xyz;
+  m.albedo = frame.matAlbedo.xyz;
+  VariantParams vp;
+  vp.fp_max = pc.params.x;
+  vp.fp_min_cap = pc.params.y;
+  vp.sigma2 = pc.params.z;
+  vp.kappa = pc.params.w;
+
+  if (SPP_N == 1) {
+    // Pixels past the image edge still run: they are the quad's helper lanes.
+    Ray ray = cameraRay(c, pixelCentre(px));
+    SurfaceSample s = traceRay(ray, light);
+    ShadingFootprint f;
+    if (DERIV_MODE == DERIV_ANALYTIC) {
+      f = analyticFootprint(s, ray, light);
+    } else if (DERIV_MODE == DERIV_QUAD_FINE) {
+      bool right = (lane & 1u) != 0u;
+      bool bottom = (lane & 2u) != 0u;
+      SurfaceSample h = quadNeighbour(s, swapHorizontal(s), c, light, px + ivec2(right ? -1 : 1, 0));
+      SurfaceSample v = quadNeighbour(s, swapVertical(s), c, light, px + ivec2(0, bottom ? -1 : 1));
+      f = quadFootprint(s, right ? h : s, right ? s : h, bottom ? v : s, bottom ? s : v);
+    } else {
+      ivec2 q = px - ivec2(int(lane & 1u), int(lane >> 1u));
+      SurfaceSample s0 = quadNeighbour(s, broadcastLane(s, 0u), c, light, q);
+      SurfaceSample s1 = quadNeighbour(s, broadcastLane(s, 1u), c, light, q + ivec2(1, 0));
+      SurfaceSample s2 = quadNeighbour(s, broadcastLane(s, 2u), c, light, q + ivec2(0, 1));
+      f = quadFootprint(s, s0, s1, s0, s2);
+    }
+    FilteredNdf ndf = runVariant(m.ndf, m.alpha, f, vp);
+    PixelShade sh = shadeSample(s, f, ndf, m);
+    if (!inside) return;
+    put3(CH_BEAUTY, idx, sh.specular + sh.diffuse);
+    put3(CH_SPECULAR, idx, sh.specular);
+    put3(CH_DIFFUSE, idx, sh.diffuse);
+    put(CH_STDERR, idx, 0.0);
+    put(CH_COUNT, idx, 1.0);
+    put(CH_M2, idx, 0.0);
+    writeAovs(idx, px, s, sh, prev);
+    return;
+  }
+
+  // Supersampled: N x N jittered strata of the pixel (box filter), merged into
+  // the running mean and luminance M2 of earlier rounds (Chan et al.).
+  if (!inside) return;
+  float countA = pc.round.x == 0 ? 0.0 : get(CH_COUNT, idx);
+  vec3 specA = countA > 0.0 ? get3(CH_SPECULAR, idx) : vec3(0.0);
+  vec3 diffA = countA > 0.0 ? get3(CH_DIFFUSE, idx) : vec3(0.0);
+  float m2A = countA > 0.0 ? get(CH_M2, idx) : 0.0;
+  float meanYA = luminance(specA + diffA);
+  if (countA > 1.0 && pc.target.x > 0.0) {
+    float se = sqrt(m2A / ((countA - 1.0) * countA));
+    if (se <= pc.target.x * max(meanYA, pc.target.y)) return;  // converged
+  }
+  vec3 specSum = vec3(0.0);
+  vec3 diffSum = vec3(0.0);
+  float meanY = 0.0;
+  float m2 = 0.0;
+  for (int j = 0; j < SPP_N; j++) {
+    for (int i = 0; i < SPP_N; i++) {
+      int k = j * SPP_N + i;
+      vec2 pos = vec2(px) + (vec2(i, j) + sampleJitter(px, k)) / float(SPP_N);
+      Ray ray = cameraRay(c, pos);
+      SurfaceSample s = traceRay(ray, light);
+      ShadingFootprint f = zeroFootprint(s);
+#ifdef SHIMMER_USER_VARIANT
+      f = analyticFootprint(s, ray, light);
+#else
+      if (VARIANT_ID != VARIANT_NONE) f = analyticFootprint(s, ray, light);
+#endif
+      PixelShade sh = shadeSample(s, f, runVariant(m.ndf, m.alpha, f, vp), m);
+      specSum += sh.specular;
+      diffSum += sh.diffuse;
+      float y = luminance(sh.specular + sh.diffuse);
+      float delta = y - meanY;
+      meanY += delta / float(k + 1);
+      m2 += delta * (y - meanY);
+    }
+  }
+  float countB = float(SPP_N * SPP_N);
+  float count = countA + countB;
+  float d = meanY - meanYA;
+  float m2All = m2A + m2 + d * d * countA * countB / count;
+  vec3 spec = (specA * countA + specSum) / count;
+  vec3 diff = (diffA * countA + diffSum) / count;
+  float se = sqrt(m2All / ((count - 1.0) * count));
+  put3(CH_BEAUTY, idx, spec + diff);
+  put3(CH_SPECULAR, idx, spec);
+  put3(CH_DIFFUSE, idx, diff);
+  put(CH_COUNT, idx, count);
+  put(CH_M2, idx, m2All);
+  put(CH_STDERR, idx, se);
+  if (pc.target.x > 0.0 && se > pc.target.x * max(luminance(spec + diff), pc.target.y))
+    atomicAdd(counter.unconverged, 1u);
+  if (pc.round.x == 0) {
+    // AOVs describe the pixel centre.
+    Ray ray = cameraRay(c, pixelCentre(px));
+    SurfaceSample s = traceRay(ray, light);
+    ShadingFootprint f = analyticFootprint(s, ray, light);
+    writeAovs(idx, px, s, shadeSample(s, f, runVariant(m.ndf, m.alpha, f, vp), m), prev);
+  }
+}

@@ -1,0 +1,260 @@
+// What one pixel sample computes, shared by the GPU kernel
+// (renderer/shaders/render.comp) and the CPU double oracle: the surface seen
+// through a pixel, its shading footprint from either derivative source, and
+// the shaded specular and diffuse radiance.
+
+const int LIGHT_DIRECTIONAL = 0;
+const int LIGHT_SPHERE = 1;
+
+const int DERIV_ANALYTIC = 0;     // ray differentials (Igehy 1999) carried to hpp (seed 000)
+const int DERIV_QUAD_FINE = 1;    // 2x2 quad differences, per row / column (ddx_fine)
+const int DERIV_QUAD_COARSE = 2;  // 2x2 quad differences of the quad's first row / column (ddx_coarse)
+
+// Directional: vec = unit direction towards the light, radiance = irradiance
+// at normal incidence. Sphere: vec = centre, radiance = intensity
+// (irradiance at unit distance); a small sphere is shaded in its point limit
+// (radius only keeps 1 / d^2 finite).
+struct Light {
+  int type;
+  vec3 vec;
+  vec3 radiance;
+  real radius;
+};
+
+struct Material {
+  int ndf;
+  vec2 alpha;
+  vec3 f0;
+  vec3 albedo;
+};
+
+struct SurfaceSample {
+  int prim;  // -1: the ray missed
+  real t;    // distance from the eye
+  vec3 p;
+  vec3 n;   // shading normal
+  vec3 ng;  // geometric normal
+  vec3 tangent;
+  vec3 bitangent;
+  vec3 v;  // unit direction to the eye
+  vec3 l;  // unit direction to the light
+  vec3 irradiance;
+  vec2 hpp;  // slope-space half vector h.xy / h.z in (tangent, bitangent, n) (seed 000)
+};
+
+vec3 lightDirection(Light light, vec3 p) {
+  if (light.type == LIGHT_SPHERE) return safeNormalize(light.vec - p, vec3(real(0), real(1), real(0)));
+  return light.vec;
+}
+
+vec3 lightIrradiance(Light light, vec3 p) {
+  if (light.type != LIGHT_SPHERE) return light.radiance;
+  vec3 d = light.vec - p;
+  return light.radiance / max(dot(d, d), light.radius * light.radius);
+}
+
+real guardedZ(real z) {
+  if (abs(z) < real(1e-8)) return z < real(0) ? real(-1e-8) : real(1e-8);
+  return z;
+}
+
+SurfaceSample missedSample() {
+  SurfaceSample s;
+  s.prim = -1;
+  s.t = real(0);
+  s.p = vec3(real(0), real(0), real(0));
+  s.n = s.p;
+  s.ng = s.p;
+  s.tangent = s.p;
+  s.bitangent = s.p;
+  s.v = s.p;
+  s.l = s.p;
+  s.irradiance = s.p;
+  s.hpp = vec2(real(0), real(0));
+  return s;
+}
+
+// Surface attributes of primitive `prim` at point p (p may lie off the
+// surface when a neighbour's ray is continued on this primitive).
+SurfaceSample surfaceAt(int prim, vec3 p, vec3 eye, Light light) {
+  Prim pr = loadPrim(prim);
+  SurfaceSample s;
+  s.prim = prim;
+  s.p = p;
+  s.t = length(eye - p);
+  s.ng = geometricNormalAt(pr, p);
+  s.n = shadingNormalAt(pr, p);
+  s.tangent = normalize(cross(tangentAxis(pr, s.n), s.n));
+  s.bitangent = cross(s.n, s.tangent);
+  s.v = safeNormalize(eye - p, s.n);
+  s.l = lightDirection(light, p);
+  s.irradiance = lightIrradiance(light, p);
+  vec3 h = safeNormalize(s.v + s.l, s.n);
+  real hz = guardedZ(dot(h, s.n));
+  s.hpp = vec2(dot(h, s.tangent), dot(h, s.bitangent)) / hz;
+  return s;
+}
+
+SurfaceSample traceRay(Ray r, Light light) {
+  Hit hit = traceScene(r.o, r.d);
+  if (hit.prim < 0) return missedSample();
+  return surfaceAt(hit.prim, r.o + r.d * hit.t, r.o, light);
+}
+
+// A pixel shader's helper lane keeps interpolating its own triangle past the
+// silhouette; the analytic counterpart continues the neighbour pixel's ray
+// onto this sample's tangent plane and evaluates this primitive there.
+SurfaceSample continueOnPrim(SurfaceSample s, Camera c, Light light, vec2 pix) {
+  if (s.prim < 0) return s;
+  Ray r = cameraRay(c, pix);
+  real denom = dot(r.d, s.ng);
+  if (abs(denom) < real(1e-9)) return s;
+  real t = dot(s.p - r.o, s.ng) / denom;
+  if (!(t > real(0))) return s;
+  return surfaceAt(s.prim, r.o + r.d * t, r.o, light);
+}
+
+// Quad finite differences: x0/x1 are the left/right samples of the row used
+// for d/dx, y0/y1 the top/bottom samples of the column used for d/dy.
+ShadingFootprint quadFootprint(SurfaceSample s, SurfaceSample x0, SurfaceSample x1, SurfaceSample y0,
+                               SurfaceSample y1) {
+  ShadingFootprint f;
+  f.hpp = s.hpp;
+  f.n = s.n;
+  f.dhpp_dx = x1.hpp - x0.hpp;
+  f.dhpp_dy = y1.hpp - y0.hpp;
+  f.dn_dx = x1.n - x0.n;
+  f.dn_dy = y1.n - y0.n;
+  f.dng_dx = x1.ng - x0.ng;
+  f.dng_dy = y1.ng - y0.ng;
+  return f;
+}
+
+ShadingFootprint zeroFootprint(SurfaceSample s) {
+  ShadingFootprint f;
+  vec3 z = vec3(real(0), real(0), real(0));
+  f.hpp = s.hpp;
+  f.n = s.n;
+  f.dhpp_dx = vec2(real(0), real(0));
+  f.dhpp_dy = f.dhpp_dx;
+  f.dn_dx = z;
+  f.dn_dy = z;
+  f.dng_dx = z;
+  f.dng_dy = z;
+  return f;
+}
+
+// d hpp for a move dp on the surface with shading-normal change dn: the
+// change of the view and light directions and of the whole tangent frame
+// (curvature), chained by hand through h = normalize(v + l) and
+// hpp = (h.t, h.b) / h.n (seed 000, "Filtering Shading Normals" and ray differentials).
+vec2 hppDerivative(SurfaceSample s, Prim pr, Light light, vec3 dp, vec3 dn) {
+  vec3 dv = dNormalize(s.v * s.t, -dp);
+  vec3 dl = vec3(real(0), real(0), real(0));
+  if (light.type == LIGHT_SPHERE) dl = dNormalize(light.vec - s.p, -dp);
+  vec3 hv = s.v + s.l;
+  vec3 h = safeNormalize(hv, s.n);
+  vec3 dh = dNormalize(hv, dv + dl);
+  vec3 axis = tangentAxis(pr, s.n);
+  vec3 dt = dNormalize(cross(axis, s.n), cross(axis, dn));
+  vec3 db = cross(dn, s.tangent) + cross(s.n, dt);
+  vec3 hl = vec3(dot(h, s.tangent), dot(h, s.bitangent), guardedZ(dot(h, s.n)));
+  vec3 dhl = vec3(dot(dh, s.tangent) + dot(h, dt), dot(dh, s.bitangent) + dot(h, db), dot(dh, s.n) + dot(h, dn));
+  return (vec2(dhl.x, dhl.y) * hl.z - vec2(hl.x, hl.y) * dhl.z) / (hl.z * hl.z);
+}
+
+// Ray differentials transferred to the hit point (Igehy 1999, origin fixed):
+// dp = t dd - d (t dd . ng) / (d . ng), then through the surface to n and hpp.
+ShadingFootprint analyticFootprint(SurfaceSample s, Ray r, Light light) {
+  if (s.prim < 0) return zeroFootprint(s);
+  Prim pr = loadPrim(s.prim);
+  real dn = guardedZ(dot(r.d, s.ng));
+  vec3 dpx = r.ddx * s.t;
+  dpx = dpx - r.d * (dot(dpx, s.ng) / dn);
+  vec3 dpy = r.ddy * s.t;
+  dpy = dpy - r.d * (dot(dpy, s.ng) / dn);
+  ShadingFootprint f;
+  f.hpp = s.hpp;
+  f.n = s.n;
+  f.dn_dx = shadingNormalDeriv(pr, s.p, dpx);
+  f.dn_dy = shadingNormalDeriv(pr, s.p, dpy);
+  f.dng_dx = geometricNormalDeriv(pr, s.p, dpx);
+  f.dng_dy = geometricNormalDeriv(pr, s.p, dpy);
+  f.dhpp_dx = hppDerivative(s, pr, light, dpx, f.dn_dx);
+  f.dhpp_dy = hppDerivative(s, pr, light, dpy, f.dn_dy);
+  return f;
+}
+
+struct PixelShade {
+  vec3 specular;
+  vec3 diffuse;
+  vec2 alphaEff;
+  vec2 footprint;  // slope-space footprint half-sides (|dx hpp| + |dy hpp|) / 2
+};
+
+PixelShade shadeSample(SurfaceSample s, ShadingFootprint f, FilteredNdf ndf, Material m) {
+  PixelShade o;
+  vec3 z = vec3(real(0), real(0), real(0));
+  o.specular = z;
+  o.diffuse = z;
+  o.alphaEff = vec2(real(0), real(0));
+  o.footprint = o.alphaEff;
+  if (s.prim < 0) return o;
+  o.alphaEff = ndf.alpha_eff;
+  o.footprint = footprintHalfSides(f);
+  if (!(dot(s.ng, s.l) > real(0))) return o;  // light below the geometric horizon
+  vec3 vl = vec3(dot(s.v, s.tangent), dot(s.v, s.bitangent), dot(s.v, s.n));
+  vec3 ll = vec3(dot(s.l, s.tangent), dot(s.l, s.bitangent), dot(s.l, s.n));
+  vec3 h = safeNormalize(s.v + s.l, s.n);
+  o.specular = specularRadiance(m.ndf, ndf.density, ndf.alpha_eff, m.f0, vl, ll, dot(s.v, h), s.irradiance);
+  o.diffuse = diffuseRadiance(m.albedo, ll.z, s.irradiance);
+  return o;
+}
+
+vec2 pixelCentre(ivec2 px) { return vec2(real(px.x) + real(0.5), real(px.y) + real(0.5)); }
+
+// The sample of the neighbour pixel px as the quad sees it from s: its own
+// surface when it shows the same primitive, else s's primitive continued.
+SurfaceSample quadNeighbour(SurfaceSample s, SurfaceSample other, Camera c, Light light, ivec2 px) {
+  if (other.prim == s.prim || s.prim < 0) return other;
+  return continueOnPrim(s, c, light, pixelCentre(px));
+}
+
+// The CPU oracle of one pixel (centre sample): the kernel's computation with
+// the quad's neighbours traced here instead of exchanged between invocations.
+struct PixelResult {
+  SurfaceSample s;
+  ShadingFootprint f;
+  FilteredNdf ndf;
+  PixelShade shade;
+};
+
+PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, int derivMode, VariantParams vp,
+                              ivec2 px) {
+  PixelResult r;
+  Ray ray = cameraRay(c, pixelCentre(px));
+  r.s = traceRay(ray, light);
+  if (r.s.prim < 0 || derivMode == DERIV_ANALYTIC) {
+    r.f = analyticFootprint(r.s, ray, light);
+  } else {
+    ivec2 q = ivec2((px.x / 2) * 2, (px.y / 2) * 2);
+    int ox = px.x - q.x;
+    int oy = px.y - q.y;
+    if (derivMode == DERIV_QUAD_COARSE) {
+      ox = 0;
+      oy = 0;
+    }
+    ivec2 px0 = ivec2(q.x, q.y + oy);
+    ivec2 px1 = ivec2(q.x + 1, q.y + oy);
+    ivec2 py0 = ivec2(q.x + ox, q.y);
+    ivec2 py1 = ivec2(q.x + ox, q.y + 1);
+    SurfaceSample x0 = quadNeighbour(r.s, traceRay(cameraRay(c, pixelCentre(px0)), light), c, light, px0);
+    SurfaceSample x1 = quadNeighbour(r.s, traceRay(cameraRay(c, pixelCentre(px1)), light), c, light, px1);
+    SurfaceSample y0 = quadNeighbour(r.s, traceRay(cameraRay(c, pixelCentre(py0)), light), c, light, py0);
+    SurfaceSample y1 = quadNeighbour(r.s, traceRay(cameraRay(c, pixelCentre(py1)), light), c, light, py1);
+    r.f = quadFootprint(r.s, x0, x1, y0, y1);
+  }
+  r.ndf = evalVariant(variant, m.ndf, m.alpha, r.f, vp);
+  r.shade = shadeSample(r.s, r.f, r.ndf, m);
+  return r;
+}

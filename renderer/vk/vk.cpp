@@ -1,0 +1,473 @@
+#include "vk.h"
+
+#include <vulkan/vulkan.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+
+namespace shimmer::vk {
+
+namespace {
+
+std::string ResultName(VkResult r) {
+  switch (r) {
+    case VK_ERROR_OUT_OF_HOST_MEMORY: return "out of host memory";
+    case VK_ERROR_OUT_OF_DEVICE_MEMORY: return "out of device memory";
+    case VK_ERROR_INITIALIZATION_FAILED: return "initialization failed";
+    case VK_ERROR_DEVICE_LOST: return "device lost";
+    case VK_ERROR_INCOMPATIBLE_DRIVER: return "no compatible Vulkan driver";
+    case VK_ERROR_LAYER_NOT_PRESENT: return "layer not present";
+    case VK_ERROR_EXTENSION_NOT_PRESENT: return "extension not present";
+    case VK_ERROR_FEATURE_NOT_PRESENT: return "feature not present";
+    case VK_TIMEOUT: return "timeout";
+    default: return "VkResult " + std::to_string(static_cast<int>(r));
+  }
+}
+
+std::string TypeName(VkPhysicalDeviceType t) {
+  switch (t) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete";
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated";
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual";
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return "cpu";
+    default: return "other";
+  }
+}
+
+int TypeRank(VkPhysicalDeviceType t) {
+  switch (t) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 0;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 1;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 3;
+    default: return 4;
+  }
+}
+
+int ComputeQueueFamily(VkPhysicalDevice pd) {
+  std::uint32_t n = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
+  std::vector<VkQueueFamilyProperties> families(n);
+  vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, families.data());
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (families[i].queueFlags & VK_QUEUE_COMPUTE_BIT) return static_cast<int>(i);
+  return -1;
+}
+
+DeviceInfo Describe(VkPhysicalDevice pd) {
+  VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+  VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+  props.pNext = &subgroup;
+  vkGetPhysicalDeviceProperties2(pd, &props);
+  DeviceInfo info;
+  info.name = props.properties.deviceName;
+  info.type = TypeName(props.properties.deviceType);
+  info.api_version = props.properties.apiVersion;
+  info.subgroup_size = subgroup.subgroupSize;
+  info.quad_ops_in_compute = (subgroup.supportedOperations & VK_SUBGROUP_FEATURE_QUAD_BIT) &&
+                             (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT);
+  info.max_storage_buffer_range = props.properties.limits.maxStorageBufferRange;
+  int family = ComputeQueueFamily(pd);
+  if (family >= 0) {
+    std::uint32_t n = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
+    std::vector<VkQueueFamilyProperties> families(n);
+    vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, families.data());
+    if (families[family].timestampValidBits > 0) info.timestamp_period_ns = props.properties.limits.timestampPeriod;
+  }
+  return info;
+}
+
+struct Instance {
+  VkInstance handle = VK_NULL_HANDLE;
+  std::string error;
+};
+
+Instance CreateInstance(bool validation) {
+  Instance out;
+  VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+  app.pApplicationName = "shimmer";
+  app.apiVersion = VK_API_VERSION_1_2;
+  std::vector<const char*> layers;
+  if (validation) {
+    std::uint32_t n = 0;
+    vkEnumerateInstanceLayerProperties(&n, nullptr);
+    std::vector<VkLayerProperties> available(n);
+    vkEnumerateInstanceLayerProperties(&n, available.data());
+    for (const auto& l : available)
+      if (std::strcmp(l.layerName, "VK_LAYER_KHRONOS_validation") == 0) layers.push_back("VK_LAYER_KHRONOS_validation");
+  }
+  VkInstanceCreateInfo ci{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+  ci.pApplicationInfo = &app;
+  ci.enabledLayerCount = static_cast<std::uint32_t>(layers.size());
+  ci.ppEnabledLayerNames = layers.data();
+  VkResult r = vkCreateInstance(&ci, nullptr, &out.handle);
+  if (r != VK_SUCCESS) {
+    out.handle = VK_NULL_HANDLE;
+    out.error = "no Vulkan driver could be loaded (" + ResultName(r) + "); install a driver such as Mesa lavapipe";
+  }
+  return out;
+}
+
+std::vector<VkPhysicalDevice> UsableDevices(VkInstance instance) {
+  std::uint32_t n = 0;
+  vkEnumeratePhysicalDevices(instance, &n, nullptr);
+  std::vector<VkPhysicalDevice> all(n);
+  vkEnumeratePhysicalDevices(instance, &n, all.data());
+  std::vector<VkPhysicalDevice> usable;
+  for (VkPhysicalDevice pd : all) {
+    VkPhysicalDeviceProperties p;
+    vkGetPhysicalDeviceProperties(pd, &p);
+    if (p.apiVersion >= VK_API_VERSION_1_2 && ComputeQueueFamily(pd) >= 0) usable.push_back(pd);
+  }
+  return usable;
+}
+
+}  // namespace
+
+struct Buffer::Impl {
+  VkDevice device = VK_NULL_HANDLE;
+  VkBuffer buffer = VK_NULL_HANDLE;
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+};
+
+Buffer::~Buffer() {
+  if (!impl_) return;
+  if (impl_->memory) vkFreeMemory(impl_->device, impl_->memory, nullptr);
+  if (impl_->buffer) vkDestroyBuffer(impl_->device, impl_->buffer, nullptr);
+}
+
+struct ComputePipeline::Impl {
+  VkDevice device = VK_NULL_HANDLE;
+  VkShaderModule module = VK_NULL_HANDLE;
+  VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
+  VkPipelineLayout layout = VK_NULL_HANDLE;
+  VkPipeline pipeline = VK_NULL_HANDLE;
+  VkDescriptorPool pool = VK_NULL_HANDLE;
+  VkDescriptorSet set = VK_NULL_HANDLE;
+  int buffer_count = 0;
+  std::uint32_t push_bytes = 0;
+};
+
+ComputePipeline::~ComputePipeline() {
+  if (!impl_) return;
+  VkDevice d = impl_->device;
+  if (impl_->pool) vkDestroyDescriptorPool(d, impl_->pool, nullptr);
+  if (impl_->pipeline) vkDestroyPipeline(d, impl_->pipeline, nullptr);
+  if (impl_->layout) vkDestroyPipelineLayout(d, impl_->layout, nullptr);
+  if (impl_->set_layout) vkDestroyDescriptorSetLayout(d, impl_->set_layout, nullptr);
+  if (impl_->module) vkDestroyShaderModule(d, impl_->module, nullptr);
+}
+
+struct Context::Impl {
+  VkInstance instance = VK_NULL_HANDLE;
+  VkPhysicalDevice physical = VK_NULL_HANDLE;
+  VkDevice device = VK_NULL_HANDLE;
+  VkQueue queue = VK_NULL_HANDLE;
+  std::uint32_t family = 0;
+  VkCommandPool pool = VK_NULL_HANDLE;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  VkFence fence = VK_NULL_HANDLE;
+  VkQueryPool queries = VK_NULL_HANDLE;
+  bool lost = false;
+
+  ~Impl() {
+    if (device) {
+      vkDeviceWaitIdle(device);
+      if (queries) vkDestroyQueryPool(device, queries, nullptr);
+      if (fence) vkDestroyFence(device, fence, nullptr);
+      if (pool) vkDestroyCommandPool(device, pool, nullptr);
+      vkDestroyDevice(device, nullptr);
+    }
+    if (instance) vkDestroyInstance(instance, nullptr);
+  }
+};
+
+std::vector<DeviceInfo> Context::ListDevices(std::string* error) {
+  Instance inst = CreateInstance(false);
+  std::vector<DeviceInfo> out;
+  if (!inst.handle) {
+    if (error) *error = inst.error;
+    return out;
+  }
+  for (VkPhysicalDevice pd : UsableDevices(inst.handle)) out.push_back(Describe(pd));
+  vkDestroyInstance(inst.handle, nullptr);
+  return out;
+}
+
+Expected<Context> Context::Create(const ContextOptions& options) {
+  Expected<Context> out;
+  std::unique_ptr<Context> ctx(new Context());
+  ctx->impl_ = std::make_unique<Impl>();
+  Impl& c = *ctx->impl_;
+  Instance inst = CreateInstance(options.validation);
+  if (!inst.handle) {
+    out.error = inst.error;
+    return out;
+  }
+  c.instance = inst.handle;
+  std::vector<VkPhysicalDevice> devices = UsableDevices(c.instance);
+  if (devices.empty()) {
+    out.error = "no Vulkan 1.2 device with a compute queue was found (install Mesa lavapipe: mesa-vulkan-drivers)";
+    return out;
+  }
+  std::vector<VkPhysicalDevice> candidates;
+  std::string names;
+  for (VkPhysicalDevice pd : devices) {
+    DeviceInfo info = Describe(pd);
+    names += (names.empty() ? "" : ", ") + ("'" + info.name + "'");
+    if (options.device_name.empty() || info.name.find(options.device_name) != std::string::npos)
+      candidates.push_back(pd);
+  }
+  if (candidates.empty()) {
+    out.error = "no Vulkan device matches '" + options.device_name + "' (available: " + names + ")";
+    return out;
+  }
+  std::stable_sort(candidates.begin(), candidates.end(), [](VkPhysicalDevice a, VkPhysicalDevice b) {
+    VkPhysicalDeviceProperties pa, pb;
+    vkGetPhysicalDeviceProperties(a, &pa);
+    vkGetPhysicalDeviceProperties(b, &pb);
+    return TypeRank(pa.deviceType) < TypeRank(pb.deviceType);
+  });
+  c.physical = candidates.front();
+  ctx->info_ = Describe(c.physical);
+  c.family = static_cast<std::uint32_t>(ComputeQueueFamily(c.physical));
+
+  float priority = 1.0f;
+  VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+  qci.queueFamilyIndex = c.family;
+  qci.queueCount = 1;
+  qci.pQueuePriorities = &priority;
+  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+  f12.hostQueryReset = VK_FALSE;
+  VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+  dci.pNext = &f12;
+  dci.queueCreateInfoCount = 1;
+  dci.pQueueCreateInfos = &qci;
+  VkResult r = vkCreateDevice(c.physical, &dci, nullptr, &c.device);
+  if (r != VK_SUCCESS) {
+    c.device = VK_NULL_HANDLE;
+    out.error = "could not create a Vulkan device on '" + ctx->info_.name + "': " + ResultName(r);
+    return out;
+  }
+  vkGetDeviceQueue(c.device, c.family, 0, &c.queue);
+  VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pci.queueFamilyIndex = c.family;
+  vkCreateCommandPool(c.device, &pci, nullptr, &c.pool);
+  VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  cai.commandPool = c.pool;
+  cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  cai.commandBufferCount = 1;
+  vkAllocateCommandBuffers(c.device, &cai, &c.cmd);
+  VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  vkCreateFence(c.device, &fci, nullptr, &c.fence);
+  if (ctx->info_.timestamp_period_ns > 0) {
+    VkQueryPoolCreateInfo qpi{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    qpi.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    qpi.queryCount = 2;
+    if (vkCreateQueryPool(c.device, &qpi, nullptr, &c.queries) != VK_SUCCESS) c.queries = VK_NULL_HANDLE;
+  }
+  out.value = std::move(ctx);
+  return out;
+}
+
+Context::~Context() = default;
+
+Expected<Buffer> Context::CreateBuffer(std::size_t bytes) {
+  Expected<Buffer> out;
+  Impl& c = *impl_;
+  bytes = std::max<std::size_t>(bytes, 16);
+  if (bytes > info_.max_storage_buffer_range) {
+    out.error = "a storage buffer of " + std::to_string(bytes >> 20) + " MiB exceeds the device's limit of " +
+                std::to_string(info_.max_storage_buffer_range >> 20) + " MiB; render a smaller image";
+    return out;
+  }
+  std::unique_ptr<Buffer> buf(new Buffer());
+  buf->impl_ = std::make_unique<Buffer::Impl>();
+  buf->impl_->device = c.device;
+  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  bci.size = bytes;
+  bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  VkResult r = vkCreateBuffer(c.device, &bci, nullptr, &buf->impl_->buffer);
+  if (r != VK_SUCCESS) {
+    buf->impl_->buffer = VK_NULL_HANDLE;
+    out.error = "could not create a buffer: " + ResultName(r);
+    return out;
+  }
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(c.device, buf->impl_->buffer, &req);
+  VkPhysicalDeviceMemoryProperties mp;
+  vkGetPhysicalDeviceMemoryProperties(c.physical, &mp);
+  const VkMemoryPropertyFlags want = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  std::uint32_t type = UINT32_MAX;
+  for (std::uint32_t i = 0; i < mp.memoryTypeCount && type == UINT32_MAX; ++i)
+    if ((req.memoryTypeBits & (1u << i)) && (mp.memoryTypes[i].propertyFlags & want) == want) type = i;
+  if (type == UINT32_MAX) {
+    out.error = "the device has no host-visible coherent memory";
+    return out;
+  }
+  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  mai.allocationSize = req.size;
+  mai.memoryTypeIndex = type;
+  r = vkAllocateMemory(c.device, &mai, nullptr, &buf->impl_->memory);
+  if (r != VK_SUCCESS) {
+    buf->impl_->memory = VK_NULL_HANDLE;
+    out.error = "could not allocate " + std::to_string(bytes >> 20) + " MiB: " + ResultName(r);
+    return out;
+  }
+  vkBindBufferMemory(c.device, buf->impl_->buffer, buf->impl_->memory, 0);
+  r = vkMapMemory(c.device, buf->impl_->memory, 0, VK_WHOLE_SIZE, 0, &buf->mapped_);
+  if (r != VK_SUCCESS) {
+    out.error = "could not map a buffer: " + ResultName(r);
+    return out;
+  }
+  buf->size_ = bytes;
+  std::memset(buf->mapped_, 0, bytes);
+  out.value = std::move(buf);
+  return out;
+}
+
+Expected<ComputePipeline> Context::CreatePipeline(std::span<const std::uint32_t> spirv,
+                                                  std::span<const std::int32_t> specialization, int buffer_count,
+                                                  std::uint32_t push_bytes) {
+  Expected<ComputePipeline> out;
+  VkDevice d = impl_->device;
+  std::unique_ptr<ComputePipeline> p(new ComputePipeline());
+  p->impl_ = std::make_unique<ComputePipeline::Impl>();
+  ComputePipeline::Impl& pi = *p->impl_;
+  pi.device = d;
+  pi.buffer_count = buffer_count;
+  pi.push_bytes = push_bytes;
+  auto fail = [&out](const std::string& what, VkResult r) {
+    out.error = "could not create the compute pipeline (" + what + "): " + ResultName(r);
+    return std::move(out);
+  };
+  VkShaderModuleCreateInfo smci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+  smci.codeSize = spirv.size_bytes();
+  smci.pCode = spirv.data();
+  if (VkResult r = vkCreateShaderModule(d, &smci, nullptr, &pi.module); r != VK_SUCCESS)
+    return fail("shader module", r);
+  std::vector<VkDescriptorSetLayoutBinding> bindings(buffer_count);
+  for (int i = 0; i < buffer_count; ++i)
+    bindings[i] = {static_cast<std::uint32_t>(i), VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT,
+                   nullptr};
+  VkDescriptorSetLayoutCreateInfo dsl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  dsl.bindingCount = static_cast<std::uint32_t>(buffer_count);
+  dsl.pBindings = bindings.data();
+  if (VkResult r = vkCreateDescriptorSetLayout(d, &dsl, nullptr, &pi.set_layout); r != VK_SUCCESS)
+    return fail("descriptor set layout", r);
+  VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, push_bytes};
+  VkPipelineLayoutCreateInfo plci{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  plci.setLayoutCount = 1;
+  plci.pSetLayouts = &pi.set_layout;
+  plci.pushConstantRangeCount = push_bytes > 0 ? 1 : 0;
+  plci.pPushConstantRanges = &range;
+  if (VkResult r = vkCreatePipelineLayout(d, &plci, nullptr, &pi.layout); r != VK_SUCCESS)
+    return fail("pipeline layout", r);
+  std::vector<VkSpecializationMapEntry> entries(specialization.size());
+  for (std::size_t i = 0; i < specialization.size(); ++i)
+    entries[i] = {static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i * sizeof(std::int32_t)),
+                  sizeof(std::int32_t)};
+  VkSpecializationInfo si{static_cast<std::uint32_t>(entries.size()), entries.data(), specialization.size_bytes(),
+                          specialization.data()};
+  VkComputePipelineCreateInfo cpci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+  cpci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+  cpci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+  cpci.stage.module = pi.module;
+  cpci.stage.pName = "main";
+  cpci.stage.pSpecializationInfo = specialization.empty() ? nullptr : &si;
+  cpci.layout = pi.layout;
+  if (VkResult r = vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpci, nullptr, &pi.pipeline); r != VK_SUCCESS)
+    return fail("pipeline", r);
+  VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, static_cast<std::uint32_t>(buffer_count)};
+  VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  dpci.maxSets = 1;
+  dpci.poolSizeCount = 1;
+  dpci.pPoolSizes = &size;
+  if (VkResult r = vkCreateDescriptorPool(d, &dpci, nullptr, &pi.pool); r != VK_SUCCESS)
+    return fail("descriptor pool", r);
+  VkDescriptorSetAllocateInfo dsai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  dsai.descriptorPool = pi.pool;
+  dsai.descriptorSetCount = 1;
+  dsai.pSetLayouts = &pi.set_layout;
+  if (VkResult r = vkAllocateDescriptorSets(d, &dsai, &pi.set); r != VK_SUCCESS) return fail("descriptor set", r);
+  out.value = std::move(p);
+  return out;
+}
+
+DispatchResult Context::Dispatch(ComputePipeline& pipeline, std::span<Buffer* const> buffers,
+                                 std::span<const std::byte> push, std::uint32_t groups_x, std::uint32_t groups_y) {
+  DispatchResult result;
+  Impl& c = *impl_;
+  ComputePipeline::Impl& pi = *pipeline.impl_;
+  if (c.lost) {
+    result.error = "device lost";
+    return result;
+  }
+  if (static_cast<int>(buffers.size()) != pi.buffer_count || push.size() != pi.push_bytes) {
+    result.error = "dispatch does not match the pipeline's buffers or push constants";
+    return result;
+  }
+  std::vector<VkDescriptorBufferInfo> infos(buffers.size());
+  std::vector<VkWriteDescriptorSet> writes(buffers.size());
+  for (std::size_t i = 0; i < buffers.size(); ++i) {
+    infos[i] = {buffers[i]->impl_->buffer, 0, VK_WHOLE_SIZE};
+    writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    writes[i].dstSet = pi.set;
+    writes[i].dstBinding = static_cast<std::uint32_t>(i);
+    writes[i].descriptorCount = 1;
+    writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[i].pBufferInfo = &infos[i];
+  }
+  vkUpdateDescriptorSets(c.device, static_cast<std::uint32_t>(writes.size()), writes.data(), 0, nullptr);
+
+  vkResetCommandBuffer(c.cmd, 0);
+  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  vkBeginCommandBuffer(c.cmd, &begin);
+  if (c.queries) {
+    vkCmdResetQueryPool(c.cmd, c.queries, 0, 2);
+    vkCmdWriteTimestamp(c.cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, c.queries, 0);
+  }
+  vkCmdBindPipeline(c.cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pi.pipeline);
+  vkCmdBindDescriptorSets(c.cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pi.layout, 0, 1, &pi.set, 0, nullptr);
+  if (!push.empty())
+    vkCmdPushConstants(c.cmd, pi.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, static_cast<std::uint32_t>(push.size()),
+                       push.data());
+  vkCmdDispatch(c.cmd, groups_x, groups_y, 1);
+  if (c.queries) vkCmdWriteTimestamp(c.cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, c.queries, 1);
+  // Make the shader's writes visible to the host's reads of the mapped memory.
+  VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+  barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+  vkCmdPipelineBarrier(c.cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0,
+                       nullptr, 0, nullptr);
+  vkEndCommandBuffer(c.cmd);
+
+  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &c.cmd;
+  auto start = std::chrono::steady_clock::now();
+  VkResult r = vkQueueSubmit(c.queue, 1, &submit, c.fence);
+  if (r == VK_SUCCESS) r = vkWaitForFences(c.device, 1, &c.fence, VK_TRUE, UINT64_MAX);
+  auto stop = std::chrono::steady_clock::now();
+  vkResetFences(c.device, 1, &c.fence);
+  if (r != VK_SUCCESS) {
+    c.lost = c.lost || r == VK_ERROR_DEVICE_LOST;
+    result.error = "the GPU dispatch failed: " + ResultName(r);
+    return result;
+  }
+  result.gpu_ms = std::chrono::duration<double, std::milli>(stop - start).count();
+  if (c.queries) {
+    std::uint64_t stamps[2] = {0, 0};
+    if (vkGetQueryPoolResults(c.device, c.queries, 0, 2, sizeof(stamps), stamps, sizeof(std::uint64_t),
+                              VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS)
+      result.gpu_ms = double(stamps[1] - stamps[0]) * info_.timestamp_period_ns * 1e-6;
+  }
+  return result;
+}
+
+}  // namespace shimmer::vk

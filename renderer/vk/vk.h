@@ -1,0 +1,105 @@
+// Headless Vulkan compute, in the style of vk-bootstrap: a context (instance,
+// device pick, queue), host-visible storage buffers, compute pipelines and
+// timed dispatches. The only code in shimmer that includes Vulkan; this
+// header does not, so callers never see the boilerplate. Errors are values.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace shimmer::vk {
+
+// A value or the message saying why there is none.
+template <class T>
+struct Expected {
+  std::unique_ptr<T> value;
+  std::string error;
+  explicit operator bool() const { return value != nullptr; }
+};
+
+struct DeviceInfo {
+  std::string name;
+  std::string type;  // "discrete", "integrated", "virtual", "cpu", "other"
+  std::uint32_t api_version = 0;
+  std::uint32_t subgroup_size = 0;
+  bool quad_ops_in_compute = false;
+  double timestamp_period_ns = 0;  // 0: no timestamps on the compute queue
+  std::uint64_t max_storage_buffer_range = 0;
+};
+
+struct ContextOptions {
+  std::string device_name;  // substring of the device name; empty: prefer a discrete GPU
+  bool validation = false;  // enable VK_LAYER_KHRONOS_validation when installed
+};
+
+class Context;
+
+class Buffer {
+ public:
+  ~Buffer();
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+  void* data() const { return mapped_; }
+  std::size_t size() const { return size_; }
+
+ private:
+  friend class Context;
+  Buffer() = default;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  void* mapped_ = nullptr;
+  std::size_t size_ = 0;
+};
+
+class ComputePipeline {
+ public:
+  ~ComputePipeline();
+  ComputePipeline(const ComputePipeline&) = delete;
+  ComputePipeline& operator=(const ComputePipeline&) = delete;
+
+ private:
+  friend class Context;
+  ComputePipeline() = default;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+struct DispatchResult {
+  double gpu_ms = 0;  // from timestamps around the dispatch; wall time when there are none
+  std::string error;  // empty on success (e.g. "device lost")
+};
+
+class Context {
+ public:
+  // Every Vulkan 1.2 device with a compute queue, as the loader lists them.
+  static std::vector<DeviceInfo> ListDevices(std::string* error);
+  static Expected<Context> Create(const ContextOptions& options);
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  const DeviceInfo& device() const { return info_; }
+
+  Expected<Buffer> CreateBuffer(std::size_t bytes);
+  // A compute pipeline over `buffer_count` storage buffers at bindings
+  // 0..n-1, push constants of `push_bytes`, int specialization constants
+  // with ids 0..k-1.
+  Expected<ComputePipeline> CreatePipeline(std::span<const std::uint32_t> spirv,
+                                           std::span<const std::int32_t> specialization, int buffer_count,
+                                           std::uint32_t push_bytes);
+  // Records, submits and waits for one dispatch of groups_x * groups_y workgroups.
+  DispatchResult Dispatch(ComputePipeline& pipeline, std::span<Buffer* const> buffers,
+                          std::span<const std::byte> push, std::uint32_t groups_x, std::uint32_t groups_y);
+
+ private:
+  Context() = default;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  DeviceInfo info_;
+};
+
+}  // namespace shimmer::vk

@@ -1,0 +1,134 @@
+// `shimmer render` end to end: the default invocation works, bad input gets
+// one clear message, a non-zero exit and no frame under a final name.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+CliRun Shimmer(const std::string& args, const std::string& env = "XDG_RUNTIME_DIR=/tmp") {
+  std::string cmd = "env " + env + " " SHIMMER_CLI " " + args + " 2>&1";
+  CliRun r;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return r;
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), buf.size(), p)) r.output += buf.data();
+  int status = pclose(p);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+fs::path FreshDir(const std::string& name) {
+  fs::path d = fs::temp_directory_path() / ("shimmer_cli_test_" + name);
+  fs::remove_all(d);
+  return d;
+}
+
+int FrameFiles(const fs::path& dir) {
+  int n = 0;
+  if (!fs::exists(dir)) return 0;
+  for (const auto& e : fs::directory_iterator(dir)) n += e.path().extension() == ".exr";
+  return n;
+}
+
+void ExpectOneClearError(const CliRun& r, const std::string& needle) {
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("shimmer: error: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
+}
+
+TEST(GpuCli, DefaultsRenderASequenceAndItsReference) {
+  fs::path dir = FreshDir("defaults"), ref = FreshDir("defaults_ref");
+  CliRun r = Shimmer("render --scene sphere-field --camera orbit --variant none --frames 3 --size 32 32 --out " +
+                  dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(FrameFiles(dir), 3);
+  CliRun rr = Shimmer("render --scene sphere-field --camera orbit --variant none --frames 2 --size 32 32 "
+                   "--reference-spp 2 --out " + ref.string());
+  ASSERT_EQ(rr.exit_code, 0) << rr.output;
+  EXPECT_EQ(FrameFiles(ref), 2);
+  std::ifstream in(ref / "sequence.json");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"reference\": true"), std::string::npos);
+  EXPECT_NE(text.find("\"spp\": 4"), std::string::npos);
+  fs::remove_all(dir);
+  fs::remove_all(ref);
+}
+
+TEST(GpuCli, UserVariantFileRendersAndCompileErrorsNameFileAndLine) {
+  fs::path dir = FreshDir("user"), file = fs::temp_directory_path() / "shimmer_cli_user_variant.glsl";
+  {
+    std::ofstream f(file);
+    f << "// doubles the roughness\n"
+         "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {\n"
+         "  return evalVariant(VARIANT_NONE, ndf, alpha * real(2), f, p);\n"
+         "}\n";
+  }
+  CliRun ok = Shimmer("render --scene sphere --frames 1 --size 16 16 --variant-file " + file.string() + " --out " +
+                   dir.string());
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_EQ(FrameFiles(dir), 1);
+  fs::remove_all(dir);
+  {
+    std::ofstream f(file);
+    f << "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {\n"
+         "  return undefinedThing(alpha);\n"
+         "}\n";
+  }
+  CliRun bad = Shimmer("render --scene sphere --frames 1 --size 16 16 --variant-file " + file.string() + " --out " +
+                    dir.string());
+  ExpectOneClearError(bad, file.string() + ":2");
+  EXPECT_EQ(FrameFiles(dir), 0);
+  fs::remove(file);
+  fs::remove_all(dir);
+}
+
+TEST(GpuCli, BadInputGetsOneMessageAndNoFrames) {
+  fs::path dir = FreshDir("bad");
+  const std::string base = "render --frames 2 --size 16 16 --out " + dir.string() + " ";
+  ExpectOneClearError(Shimmer(base + "--scene no-such-scene"), "unknown scene 'no-such-scene'");
+  ExpectOneClearError(Shimmer(base + "--variant no-such-variant"), "unknown variant 'no-such-variant'");
+  ExpectOneClearError(Shimmer(base + "--variant tk19 --param fp_max=1"), "has no parameter 'fp_max'");
+  ExpectOneClearError(Shimmer(base + "--variant tk19 --param sigma2=abc"), "is not a number");
+  ExpectOneClearError(Shimmer(base + "--material phong:0.1"), "NDF must be ggx or beckmann");
+  ExpectOneClearError(Shimmer(base + "--camera spin"), "unknown camera path 'spin'");
+  ExpectOneClearError(Shimmer(base + "--derivatives sobel"), "--derivatives");
+  ExpectOneClearError(Shimmer(base + "--variant k16-ggx-rect --material beckmann:0.1"), "GGX only");
+  ExpectOneClearError(Shimmer(base + "--variant tk19 --reference-spp 4"), "reference renders variant none");
+  EXPECT_EQ(FrameFiles(dir), 0);
+  fs::remove_all(dir);
+}
+
+TEST(GpuCli, UnwritableOutputDirectory) {
+  fs::path file = fs::temp_directory_path() / "shimmer_cli_not_a_dir";
+  { std::ofstream(file) << "x"; }
+  CliRun r = Shimmer("render --scene sphere --frames 1 --size 16 16 --out " + (file / "sub").string());
+  ExpectOneClearError(r, "cannot create output directory");
+  fs::remove(file);
+}
+
+TEST(GpuCli, NoVulkanDevice) {
+  fs::path dir = FreshDir("nodevice");
+  CliRun r = Shimmer("render --scene sphere --frames 1 --size 16 16 --out " + dir.string(),
+                  "XDG_RUNTIME_DIR=/tmp VK_ICD_FILENAMES=/nonexistent/icd.json VK_DRIVER_FILES=/nonexistent/icd.json");
+  ExpectOneClearError(r, "Vulkan");
+  EXPECT_EQ(FrameFiles(dir), 0);
+  CliRun named = Shimmer("render --scene sphere --frames 1 --size 16 16 --device no-such-gpu --out " + dir.string());
+  ExpectOneClearError(named, "no Vulkan device matches 'no-such-gpu'");
+  fs::remove_all(dir);
+}
+
+}  // namespace

@@ -1,0 +1,301 @@
+// GPU frames (Vulkan, lavapipe in CI) against the CPU double oracle, the
+// reference's convergence, a known answer, and EXR/sequence output.
+#include <gtest/gtest.h>
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "renderer.h"
+#include "scene.h"
+#include "shading.h"
+
+namespace shimmer::render {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+RenderSettings Settings(const std::string& scene_name, const std::string& variant, shading::DerivativeSource d,
+                        int size) {
+  RenderSettings s;
+  s.scene = scene::LoadScene(scene_name).value;
+  s.material = s.scene.material;
+  s.variant = variant;
+  s.derivatives = d;
+  s.width = size;
+  s.height = size;
+  s.frames = 1;
+  return s;
+}
+
+Frame RenderOne(const RenderSettings& s, int index, std::unique_ptr<Renderer>* keep = nullptr) {
+  auto [r, error] = Renderer::Create(s);
+  EXPECT_TRUE(r) << error;
+  if (!r) return {};
+  auto result = r->RenderFrame(index);
+  EXPECT_TRUE(result.error.empty()) << result.error;
+  if (keep) *keep = std::move(r);
+  return result.frame;
+}
+
+double Luminance(glm::dvec3 c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
+double f_lum(const Frame& f, int x, int y) {
+  return Luminance({f.at(kBeautyR, x, y), f.at(kBeautyR + 1, x, y), f.at(kBeautyR + 2, x, y)});
+}
+
+glm::dvec3 RayDirection(const shading::CameraDesc& c, double px, double py) {
+  double sx = c.tan_half_fov_y * c.width / c.height, sy = c.tan_half_fov_y;
+  return glm::normalize(c.fwd + c.right * ((2 * px / c.width - 1) * sx) + c.up * ((1 - 2 * py / c.height) * sy));
+}
+
+// Pixel by pixel against the oracle. Tolerance per quantity: |gpu - cpu| <=
+// 2e-3 * |cpu| + 1e-4 (float kernel against double). At silhouettes float and
+// double may see different primitives, so up to 2% of pixels may differ.
+// Surface points farther than `far` get 3e-2: there a float hit position is
+// off by ~1e-7 * distance, which moves the phase of the bumpy plane's normal
+// pattern (several periods per pixel near the horizon) enough to change a
+// sharp lobe by about 1%.
+void ExpectMatchesOracle(const std::string& scene_name, const std::string& variant, shading::DerivativeSource d,
+                         double far = 1e30) {
+  SCOPED_TRACE(scene_name + " / " + variant + " / derivatives " + std::to_string(int(d)));
+  RenderSettings s = Settings(scene_name, variant, d, 40);
+  std::unique_ptr<Renderer> r;
+  const int frame_index = 3;
+  Frame f = RenderOne(s, frame_index, &r);
+  ASSERT_FALSE(f.planes.empty());
+  const shading::VariantInfo* info = shading::FindVariant(variant);
+  auto params = shading::ResolveParams(*info, {}).values;
+  shading::CameraDesc cam = r->camera(frame_index);
+  int bad = 0, total = 0, hits = 0;
+  double max_spec = 0;
+  std::string first_bad;
+  for (int y = 0; y < s.height; ++y)
+    for (int x = 0; x < s.width; ++x) {
+      auto o = shading::ShadePixel(r->scene_words(), cam, s.scene.light, s.material, info->id, d, params, {x, y});
+      const double rel = o.depth > far ? 3e-2 : 2e-3;
+      auto close = [rel](double g, double c) { return std::abs(g - c) <= rel * std::abs(c) + 1e-4; };
+      glm::dvec3 gs{f.at(kSpecularR, x, y), f.at(kSpecularR + 1, x, y), f.at(kSpecularR + 2, x, y)};
+      glm::dvec3 gd{f.at(kDiffuseR, x, y), f.at(kDiffuseR + 1, x, y), f.at(kDiffuseR + 2, x, y)};
+      bool ok = close(Luminance(gs), Luminance(o.specular)) && close(Luminance(gd), Luminance(o.diffuse)) &&
+                close(f.at(kRoughness, x, y), std::sqrt(o.alpha_eff.x * o.alpha_eff.y)) &&
+                close(f.at(kFootprintX, x, y), o.footprint.x) && close(f.at(kDepth, x, y), o.depth);
+      ++total;
+      hits += o.hit;
+      max_spec = std::max(max_spec, Luminance(o.specular));
+      if (!ok) {
+        if (first_bad.empty())
+          first_bad = std::to_string(x) + "," + std::to_string(y) + " depth " + std::to_string(o.depth) + ": gpu spec " + std::to_string(Luminance(gs)) +
+                      " cpu " + std::to_string(Luminance(o.specular)) + ", gpu rough " +
+                      std::to_string(f.at(kRoughness, x, y)) + " cpu " +
+                      std::to_string(std::sqrt(o.alpha_eff.x * o.alpha_eff.y)) + ", gpu fp " +
+                      std::to_string(f.at(kFootprintX, x, y)) + " cpu " + std::to_string(o.footprint.x);
+        ++bad;
+      }
+    }
+  EXPECT_GT(hits, total / 20);
+  EXPECT_GT(max_spec, 0.0);  // the shot shows a highlight to compare
+  EXPECT_LE(bad, total / 50) << bad << " of " << total << " pixels differ; first " << first_bad;
+}
+
+using shading::DerivativeSource;
+
+TEST(GpuOracle, SphereAllDerivativeSources) {
+  for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kQuadCoarse, DerivativeSource::kAnalytic})
+    for (const char* v : {"none", "tk19", "k16-ggx-rect-stable", "k16-beckmann-parallelogram", "vlachos15"})
+      ExpectMatchesOracle("sphere", v, d);
+}
+
+TEST(GpuOracle, SphereField) {
+  for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
+    for (const char* v : {"none", "k16-beckmann-rect", "tk21", "toksvig-quad"}) ExpectMatchesOracle("sphere-field", v, d);
+}
+
+TEST(GpuOracle, Wires) {
+  for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
+    for (const char* v : {"none", "filament", "k16-ggx-proxy"}) ExpectMatchesOracle("wires", v, d);
+}
+
+TEST(GpuOracle, BumpyPlane) {
+  for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
+    for (const char* v : {"none", "godot", "unity-hdrp", "k16-ggx-rect-stable"}) ExpectMatchesOracle("bumpy-plane", v, d, 20.0);
+}
+
+// Known answer: GGX alpha = 0.3 on a unit sphere under a directional light,
+// evaluated here from the textbook formulas (Walter et al. 2007 D, Smith
+// height-correlated G, Schlick F) at pixel centres.
+TEST(GpuKnownAnswer, RoughGgxSphereUnderDirectionalLight) {
+  RenderSettings s = Settings("sphere", "none", DerivativeSource::kAnalytic, 64);
+  s.camera = "static";
+  s.material = scene::ParseMaterial("ggx:0.3,f0=0.04,albedo=0.5", s.material).value;
+  std::unique_ptr<Renderer> r;
+  Frame f = RenderOne(s, 0, &r);
+  ASSERT_FALSE(f.planes.empty());
+  shading::CameraDesc cam = r->camera(0);
+  const glm::dvec3 l = s.scene.light.vec, E = s.scene.light.radiance;
+  const double a2 = 0.09;
+  auto lambda = [a2](double cos_t) {
+    double tan2 = (1 - cos_t * cos_t) / (cos_t * cos_t);
+    return (std::sqrt(1 + a2 * tan2) - 1) / 2;
+  };
+  int checked = 0;
+  for (int y = 8; y < 64; y += 6)
+    for (int x = 8; x < 64; x += 6) {
+      glm::dvec3 d = RayDirection(cam, x + 0.5, y + 0.5);
+      double b = glm::dot(cam.pos, d), c = glm::dot(cam.pos, cam.pos) - 1, disc = b * b - c;
+      if (disc <= 0) continue;
+      glm::dvec3 p = cam.pos + d * (-b - std::sqrt(disc)), n = p, v = -d;
+      double nl = glm::dot(n, l), nv = glm::dot(n, v);
+      if (nl <= 0.05 || nv <= 0.05) continue;
+      glm::dvec3 h = glm::normalize(v + l);
+      double nh = glm::dot(n, h);
+      double D = a2 / (kPi * std::pow(nh * nh * (a2 - 1) + 1, 2));
+      double G = 1 / (1 + lambda(nv) + lambda(nl));
+      double F = 0.04 + 0.96 * std::pow(1 - glm::dot(v, h), 5);
+      double spec = D * G * F * E.x / (4 * nv);
+      double diff = 0.5 / kPi * nl * E.x;
+      EXPECT_NEAR(f.at(kSpecularR, x, y), spec, 1e-3 * spec + 1e-6) << x << "," << y;
+      EXPECT_NEAR(f.at(kDiffuseR, x, y), diff, 1e-4 * diff + 1e-6) << x << "," << y;
+      EXPECT_NEAR(f.at(kBeautyR, x, y), spec + diff, 1e-3 * (spec + diff)) << x << "," << y;
+      ++checked;
+    }
+  EXPECT_GT(checked, 20);
+}
+
+struct StderrStats {
+  double mean_stderr = 0;
+  int pixels = 0;
+};
+StderrStats MeanStderr(const Frame& f) {
+  StderrStats st;
+  for (int y = 0; y < f.height; ++y)
+    for (int x = 0; x < f.width; ++x)
+      if (f.at(kStderr, x, y) > 0) {
+        st.mean_stderr += f.at(kStderr, x, y);
+        ++st.pixels;
+      }
+  if (st.pixels) st.mean_stderr /= st.pixels;
+  return st;
+}
+
+TEST(GpuReference, StandardErrorShrinksLikeInverseSqrtSpp) {
+  RenderSettings s = Settings("sphere-field", "none", DerivativeSource::kAnalytic, 32);
+  s.reference_spp = 4;
+  Frame f16 = RenderOne(s, 0);
+  s.reference_spp = 16;
+  Frame f256 = RenderOne(s, 0);
+  StderrStats a = MeanStderr(f16), b = MeanStderr(f256);
+  ASSERT_GT(a.pixels, 50);
+  ASSERT_GT(b.pixels, 50);
+  EXPECT_EQ(f16.at(kSampleCount, 5, 5), 16.0f);
+  EXPECT_EQ(f256.at(kSampleCount, 5, 5), 256.0f);
+  // sqrt(256 / 16) = 4.
+  double ratio = a.mean_stderr / b.mean_stderr;
+  EXPECT_GT(ratio, 3.0) << ratio;
+  EXPECT_LT(ratio, 5.0) << ratio;
+}
+
+// On a shot whose features are larger than the sample spacing (a sample-based
+// standard error cannot see a feature that no sample hit, as on sphere-field's
+// sub-pixel spheres).
+TEST(GpuReference, MeanAgreesWithMuchHigherSppWithinStandardErrors) {
+  RenderSettings s = Settings("sphere", "none", DerivativeSource::kAnalytic, 32);
+  s.material = scene::ParseMaterial("ggx:0.1", s.material).value;
+  s.reference_spp = 4;
+  Frame lo = RenderOne(s, 2);
+  s.reference_spp = 32;
+  Frame hi = RenderOne(s, 2);
+  int within = 0, total = 0, differing = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      double a = f_lum(lo, x, y), b = f_lum(hi, x, y);
+      double se = std::hypot(lo.at(kStderr, x, y), hi.at(kStderr, x, y));
+      within += std::abs(a - b) <= 4 * se + 1e-5 * (1 + std::abs(b));
+      differing += std::abs(a - b) > 1e-6;
+      ++total;
+    }
+  EXPECT_GE(within, total * 97 / 100);
+  EXPECT_GT(differing, total / 10);  // the two renders are independent estimates, not copies
+}
+
+TEST(GpuReference, AdaptiveStopsAtTheTargetOrTheRoundCap) {
+  RenderSettings s = Settings("sphere-field", "none", DerivativeSource::kAnalytic, 32);
+  s.reference_spp = 2;
+  s.reference_tolerance = 0.05;
+  s.max_rounds = 200;
+  Frame f = RenderOne(s, 0);
+  int max_count = 0, min_count = 1 << 30;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      double y_lum = f_lum(f, x, y), se = f.at(kStderr, x, y);
+      EXPECT_LE(se, 0.05 * std::max(y_lum, kReferenceLuminanceFloor) * 1.0001) << x << "," << y;
+      int count = int(f.at(kSampleCount, x, y));
+      max_count = std::max(max_count, count);
+      min_count = std::min(min_count, count);
+    }
+  EXPECT_LT(f.rounds, 200);
+  EXPECT_GT(max_count, 4 * min_count);  // hard pixels got more samples than easy ones
+  EXPECT_EQ(min_count % 4, 0);
+}
+
+TEST(GpuSequence, WritesExrLayersAndSequenceJson) {
+  namespace fs = std::filesystem;
+  fs::path dir = fs::temp_directory_path() / "shimmer_gpu_sequence_test";
+  fs::remove_all(dir);
+  RenderSettings s = Settings("wires", "tk19", DerivativeSource::kQuadFine, 24);
+  s.frames = 3;
+  s.reference_spp = 0;
+  std::string error = RenderSequence(s, dir.string(), nullptr);
+  ASSERT_TRUE(error.empty()) << error;
+  std::ifstream in(dir / "sequence.json");
+  auto seq = nlohmann::json::parse(in);
+  EXPECT_EQ(seq["status"], "complete");
+  EXPECT_EQ(seq["scene"], "wires");
+  EXPECT_EQ(seq["variant"], "tk19");
+  EXPECT_EQ(seq["frames"].size(), 3u);
+  EXPECT_GT(seq["frames"][2]["gpu_ms"].get<double>(), 0.0);
+  EXPECT_DOUBLE_EQ(seq["params"]["sigma2"].get<double>(), 0.25);
+  Imf::InputFile exr((dir / "frame_0002.exr").string().c_str());
+  int channels = 0;
+  for (auto it = exr.header().channels().begin(); it != exr.header().channels().end(); ++it) ++channels;
+  EXPECT_EQ(channels, 18);
+  EXPECT_NE(exr.header().channels().findChannel("specular.G"), nullptr);
+  EXPECT_NE(exr.header().channels().findChannel("motion.X"), nullptr);
+  EXPECT_EQ(exr.header().channels().findChannel("stderr.Y"), nullptr);
+  for (const auto& e : fs::directory_iterator(dir))  // no temporaries left behind
+    EXPECT_TRUE(e.path().extension() == ".json" || e.path().extension() == ".exr") << e.path();
+  fs::remove_all(dir);
+}
+
+// Motion vectors point to where the surface point was in the previous frame.
+TEST(GpuSequence, MotionVectorsReprojectToThePreviousFrame) {
+  RenderSettings s = Settings("sphere", "none", DerivativeSource::kAnalytic, 48);
+  s.camera = "pan";
+  std::unique_ptr<Renderer> r;
+  Frame f = RenderOne(s, 10, &r);
+  ASSERT_FALSE(f.planes.empty());
+  shading::CameraDesc cam = r->camera(10), prev = r->camera(9);
+  int checked = 0;
+  for (int y = 10; y < 40; y += 5)
+    for (int x = 10; x < 40; x += 5) {
+      double depth = f.at(kDepth, x, y);
+      if (depth <= 0) continue;
+      glm::dvec3 p = cam.pos + RayDirection(cam, x + 0.5, y + 0.5) * depth;
+      glm::dvec3 q = p - prev.pos;
+      double z = glm::dot(q, prev.fwd);
+      double px = (glm::dot(q, prev.right) / (z * prev.tan_half_fov_y) + 1) * 0.5 * prev.width;
+      double py = (1 - glm::dot(q, prev.up) / (z * prev.tan_half_fov_y)) * 0.5 * prev.height;
+      EXPECT_NEAR(f.at(kMotionX, x, y), px - (x + 0.5), 1e-3) << x << "," << y;
+      EXPECT_NEAR(f.at(kMotionX + 1, x, y), py - (y + 0.5), 1e-3) << x << "," << y;
+      EXPECT_GT(std::abs(f.at(kMotionX, x, y)), 0.01);  // the pan moves the image
+      ++checked;
+    }
+  EXPECT_GT(checked, 5);
+}
+
+}  // namespace
+}  // namespace shimmer::render

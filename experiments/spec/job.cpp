@@ -1,0 +1,131 @@
+#include "job.h"
+
+#include <cstdio>
+
+#include "shading.h"
+
+namespace shimmer::experiments {
+
+using nlohmann::json;
+
+json Job::ToJson() const {
+  return {{"scene", scene},   {"material", material},       {"camera", camera},
+          {"variant", variant}, {"params", params},         {"derivatives", derivatives},
+          {"width", width},   {"height", height},           {"frames", frames},
+          {"fps", fps},       {"reference_spp", reference.spp}, {"reference_tolerance", reference.tolerance}};
+}
+
+Job Job::FromJson(const json& j) {
+  Job job;
+  job.scene = j.at("scene");
+  job.material = j.at("material");
+  job.camera = j.at("camera");
+  job.variant = j.at("variant");
+  job.params = j.at("params").get<std::map<std::string, double>>();
+  job.derivatives = j.at("derivatives");
+  job.width = j.at("width");
+  job.height = j.at("height");
+  job.frames = j.at("frames");
+  job.fps = j.at("fps");
+  job.reference.spp = j.at("reference_spp");
+  job.reference.tolerance = j.at("reference_tolerance");
+  return job;
+}
+
+namespace {
+
+// Every combination of one value per swept parameter.
+std::vector<std::map<std::string, double>> ParameterGrid(const std::map<std::string, std::vector<double>>& sweeps) {
+  std::vector<std::map<std::string, double>> grid{{}};
+  for (const auto& [name, values] : sweeps) {
+    std::vector<std::map<std::string, double>> next;
+    for (const auto& partial : grid)
+      for (double v : values) {
+        auto point = partial;
+        point[name] = v;
+        next.push_back(std::move(point));
+      }
+    grid = std::move(next);
+  }
+  return grid;
+}
+
+}  // namespace
+
+std::vector<Job> ExpandJobs(const Spec& spec) {
+  std::vector<Job> jobs;
+  for (const std::string& scene : spec.scenes)
+    for (const std::string& material : spec.materials)
+      for (const std::string& camera : spec.cameras)
+        for (const VariantSweep& variant : spec.variants)
+          for (const auto& params : ParameterGrid(variant.params))
+            for (const std::string& derivatives : spec.derivatives) {
+              Job job;
+              job.scene = scene;
+              job.material = material;
+              job.camera = camera;
+              job.variant = variant.name;
+              job.params = params;
+              job.derivatives = derivatives;
+              job.width = spec.width;
+              job.height = spec.height;
+              job.frames = spec.frames;
+              job.fps = spec.fps;
+              job.reference = spec.reference;
+              jobs.push_back(std::move(job));
+            }
+  return jobs;
+}
+
+std::string Fnv1a64Hex(std::string_view text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::string ShadingCoreVersion() {
+  static const std::string version = [] {
+    std::string all;
+    for (const auto& [name, text] : shading::GlslSources()) all.append(name).append(text);
+    return Fnv1a64Hex(all);
+  }();
+  return version;
+}
+
+std::string JobId(const Job& job) {
+  json j = job.ToJson();
+  j["core"] = ShadingCoreVersion();
+  return Fnv1a64Hex(j.dump());  // nlohmann objects are key-sorted: canonical
+}
+
+std::string ReferenceId(const Job& job) {
+  json j = {{"scene", job.scene},     {"material", job.material}, {"camera", job.camera},
+            {"width", job.width},     {"height", job.height},     {"frames", job.frames},
+            {"fps", job.fps},         {"reference_spp", job.reference.spp},
+            {"reference_tolerance", job.reference.tolerance},     {"core", ShadingCoreVersion()}};
+  return Fnv1a64Hex(j.dump());
+}
+
+bool ParseShard(const std::string& text, int* index, int* count) {
+  int i = 0, n = 0;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%d/%d%c", &i, &n, &tail) != 2) return false;
+  if (n < 1 || i < 0 || i >= n) return false;
+  *index = i;
+  *count = n;
+  return true;
+}
+
+std::vector<Job> ShardOf(const std::vector<Job>& jobs, int index, int count) {
+  std::vector<Job> out;
+  for (std::size_t k = 0; k < jobs.size(); ++k)
+    if (int(k % count) == index) out.push_back(jobs[k]);
+  return out;
+}
+
+}  // namespace shimmer::experiments

@@ -1,0 +1,53 @@
+// Jobs: one (scene, material, camera, variant with parameter values,
+// derivative source) of a spec, with an id that hashes every resolved
+// parameter and the shading core, so reruns skip finished work.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "spec.h"
+
+namespace shimmer::experiments {
+
+struct Job {
+  std::string scene;
+  std::string material;
+  std::string camera;
+  std::string variant;
+  std::map<std::string, double> params;  // only the values the spec sweeps; defaults are implied by the core version
+  std::string derivatives;
+  int width = 0, height = 0, frames = 0;
+  double fps = 0;
+  ReferenceQuality reference;
+
+  nlohmann::json ToJson() const;
+  static Job FromJson(const nlohmann::json& j);
+};
+
+// The cross product, in a deterministic order (spec order, outermost first:
+// scene, material, camera, variant, parameter values, derivatives).
+std::vector<Job> ExpandJobs(const Spec& spec);
+
+// 16 hex digits: FNV-1a 64 of the canonical JSON of the job and the shading
+// core's version. Stable across runs and machines.
+std::string JobId(const Job& job);
+
+// The reference a job is measured against: shared by every variant and
+// derivative source of the same scene, material, camera, size and motion.
+std::string ReferenceId(const Job& job);
+
+// Hash of the GLSL shading core text: changes whenever the filter math does.
+std::string ShadingCoreVersion();
+
+// Jobs with index % n == i (i in [0, n)). Parses "i/n"; returns false on bad input.
+bool ParseShard(const std::string& text, int* index, int* count);
+std::vector<Job> ShardOf(const std::vector<Job>& jobs, int index, int count);
+
+std::string Fnv1a64Hex(std::string_view text);
+
+}  // namespace shimmer::experiments

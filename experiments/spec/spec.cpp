@@ -1,0 +1,250 @@
+#include "spec.h"
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "scene.h"
+#include "shading.h"
+
+namespace shimmer::experiments {
+
+namespace {
+
+using nlohmann::json;
+
+// Validation stops at the first problem; the exception carries the key so the
+// message can point at its line.
+struct SpecError {
+  std::string key;
+  std::string problem;
+};
+
+// The 1-based line of the first `"key"` in the text, or 0 when absent.
+int LineOfKey(std::string_view text, const std::string& key) {
+  const std::string needle = "\"" + key + "\"";
+  const auto pos = text.find(needle);
+  if (pos == std::string_view::npos) return 0;
+  return 1 + int(std::count(text.begin(), text.begin() + pos, '\n'));
+}
+
+void RejectUnknownKeys(const json& object, const std::set<std::string>& known, const std::string& where) {
+  for (const auto& [key, value] : object.items()) {
+    if (!known.count(key)) {
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      throw SpecError{key, "unknown key" + (where.empty() ? "" : " in " + where) + " (expected one of: " + list + ")"};
+    }
+  }
+}
+
+std::vector<std::string> StringList(const json& j, const std::string& key) {
+  if (!j.is_array()) throw SpecError{key, "must be an array of strings"};
+  std::vector<std::string> out;
+  for (const json& v : j) {
+    if (!v.is_string()) throw SpecError{key, "must be an array of strings, found " + v.dump()};
+    out.push_back(v.get<std::string>());
+  }
+  if (out.empty()) throw SpecError{key, "is empty: the experiment would have no jobs"};
+  return out;
+}
+
+double Number(const json& j, const std::string& key) {
+  if (!j.is_number()) throw SpecError{key, "must be a number, found " + j.dump()};
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) throw SpecError{key, "must be finite"};
+  return v;
+}
+
+int PositiveInt(const json& j, const std::string& key) {
+  if (!j.is_number_integer() || j.get<long long>() <= 0 || j.get<long long>() > 1 << 20)
+    throw SpecError{key, "must be a positive integer, found " + j.dump()};
+  return j.get<int>();
+}
+
+// A list of numbers, or {"from", "to", "steps", "scale": "linear|log"}.
+std::vector<double> ParameterValues(const json& j, const std::string& key) {
+  if (j.is_number()) return {Number(j, key)};
+  if (j.is_array()) {
+    std::vector<double> out;
+    for (const json& v : j) out.push_back(Number(v, key));
+    if (out.empty()) throw SpecError{key, "has no values"};
+    return out;
+  }
+  if (!j.is_object()) throw SpecError{key, "must be a number, a list, or {\"from\", \"to\", \"steps\", \"scale\"}"};
+  RejectUnknownKeys(j, {"from", "to", "steps", "scale"}, key);
+  for (const char* k : {"from", "to", "steps"})
+    if (!j.contains(k)) throw SpecError{key, std::string("range needs \"") + k + "\""};
+  const double from = Number(j["from"], key + ".from"), to = Number(j["to"], key + ".to");
+  const int steps = PositiveInt(j["steps"], key + ".steps");
+  const std::string scale = j.value("scale", "linear");
+  if (scale != "linear" && scale != "log") throw SpecError{key, "scale must be \"linear\" or \"log\""};
+  if (scale == "log" && (from <= 0 || to <= 0)) throw SpecError{key, "a log range needs from > 0 and to > 0"};
+  std::vector<double> out;
+  for (int i = 0; i < steps; ++i) {
+    const double t = steps == 1 ? 0.0 : double(i) / (steps - 1);
+    out.push_back(scale == "log" ? from * std::pow(to / from, t) : from + (to - from) * t);
+  }
+  return out;
+}
+
+VariantSweep ParseVariant(const json& j) {
+  VariantSweep v;
+  if (j.is_string()) {
+    v.name = j.get<std::string>();
+  } else if (j.is_object()) {
+    RejectUnknownKeys(j, {"name", "params"}, "a variant");
+    if (!j.contains("name") || !j["name"].is_string()) throw SpecError{"variants", "each variant needs a \"name\""};
+    v.name = j["name"].get<std::string>();
+    if (j.contains("params")) {
+      if (!j["params"].is_object()) throw SpecError{"params", "must be an object of parameter values"};
+      for (const auto& [name, values] : j["params"].items()) v.params[name] = ParameterValues(values, name);
+    }
+  } else {
+    throw SpecError{"variants", "entries must be a name or {\"name\", \"params\"}"};
+  }
+  // supersample-N is the renderer's equal-time baseline, not a catalogue entry.
+  if (v.name.rfind("supersample-", 0) == 0) {
+    const std::string n = v.name.substr(12);
+    if (n.empty() || n.find_first_not_of("0123456789") != std::string::npos || std::stoi(n) < 1 || std::stoi(n) > 64)
+      throw SpecError{v.name, "supersample-N needs N between 1 and 64"};
+    if (!v.params.empty()) throw SpecError{v.name, "supersample-N takes no parameters"};
+    return v;
+  }
+  const shading::VariantInfo* info = shading::FindVariant(v.name);
+  if (!info) throw SpecError{v.name, "unknown variant (see `shimmer variants`)"};
+  for (const auto& [name, values] : v.params) {
+    std::vector<std::pair<std::string, double>> overrides;
+    for (double x : values) overrides.push_back({name, x});
+    const auto resolved = shading::ResolveParams(*info, overrides);
+    if (!resolved.error.empty()) throw SpecError{name, resolved.error};
+  }
+  return v;
+}
+
+Spec ParseSpecObject(const json& j) {
+  if (!j.is_object()) throw SpecError{"", "a spec is a JSON object"};
+  RejectUnknownKeys(j,
+                    {"name", "scenes", "materials", "cameras", "variants", "derivatives", "size", "frames", "fps",
+                     "reference", "metrics", "fit"},
+                    "");
+  Spec s;
+  for (const char* required : {"name", "scenes", "materials", "cameras", "variants"})
+    if (!j.contains(required)) throw SpecError{required, "is required"};
+  if (!j["name"].is_string() || j["name"].get<std::string>().empty())
+    throw SpecError{"name", "must be a non-empty string"};
+  s.name = j["name"];
+  s.scenes = StringList(j["scenes"], "scenes");
+  for (const std::string& scene : s.scenes) {
+    const auto loaded = scene::LoadScene(scene);
+    if (!loaded.ok()) throw SpecError{scene, loaded.error};
+  }
+  s.materials = StringList(j["materials"], "materials");
+  for (const std::string& m : s.materials) {
+    const auto parsed = scene::ParseMaterial(m, {});
+    if (!parsed.ok()) throw SpecError{m, parsed.error};
+  }
+  s.cameras = StringList(j["cameras"], "cameras");
+  for (const std::string& c : s.cameras)
+    if (!scene::IsCameraPath(c)) throw SpecError{c, "unknown camera path (orbit, pan, dolly, vr-jitter)"};
+  if (!j["variants"].is_array() || j["variants"].empty())
+    throw SpecError{"variants", "must be a non-empty array"};
+  for (const json& v : j["variants"]) s.variants.push_back(ParseVariant(v));
+  if (j.contains("derivatives")) {
+    s.derivatives = StringList(j["derivatives"], "derivatives");
+    for (const std::string& d : s.derivatives)
+      if (d != "quad" && d != "quad-coarse" && d != "analytic")
+        throw SpecError{"derivatives", "must be quad, quad-coarse or analytic, found \"" + d + "\""};
+  }
+  if (j.contains("size")) {
+    const json& size = j["size"];
+    if (!size.is_array() || size.size() != 2) throw SpecError{"size", "must be [width, height]"};
+    s.width = PositiveInt(size[0], "size");
+    s.height = PositiveInt(size[1], "size");
+    if (s.width % 2 || s.height % 2) throw SpecError{"size", "width and height must be even (2x2 quads)"};
+  }
+  if (j.contains("frames")) s.frames = PositiveInt(j["frames"], "frames");
+  if (s.frames < 2) throw SpecError{"frames", "temporal metrics need at least 2 frames"};
+  if (j.contains("fps")) {
+    s.fps = Number(j["fps"], "fps");
+    if (s.fps <= 0) throw SpecError{"fps", "must be > 0"};
+  }
+  if (j.contains("reference")) {
+    const json& r = j["reference"];
+    if (!r.is_object()) throw SpecError{"reference", "must be {\"spp\": N} or {\"tolerance\": T}"};
+    RejectUnknownKeys(r, {"spp", "tolerance"}, "reference");
+    if (r.contains("spp")) s.reference.spp = PositiveInt(r["spp"], "spp");
+    if (r.contains("tolerance")) {
+      s.reference.tolerance = Number(r["tolerance"], "tolerance");
+      if (s.reference.tolerance <= 0 || s.reference.tolerance >= 1)
+        throw SpecError{"tolerance", "must be in (0, 1)"};
+    }
+  }
+  if (j.contains("metrics")) {
+    const json& m = j["metrics"];
+    if (!m.is_object()) throw SpecError{"metrics", "must be an object"};
+    RejectUnknownKeys(m, {"highlight_mask", "segment"}, "metrics");
+    if (m.contains("highlight_mask")) {
+      if (!m["highlight_mask"].is_boolean()) throw SpecError{"highlight_mask", "must be true or false"};
+      s.metrics.highlight_mask = m["highlight_mask"];
+    }
+    if (m.contains("segment")) s.metrics.segment = PositiveInt(m["segment"], "segment");
+  }
+  if (j.contains("fit")) {
+    const json& f = j["fit"];
+    if (!f.is_object()) throw SpecError{"fit", "must be an object"};
+    RejectUnknownKeys(f, {"weights"}, "fit");
+    if (f.contains("weights")) {
+      const json& w = f["weights"];
+      if (!w.is_object()) throw SpecError{"weights", "must be {\"flicker\", \"spatial\", \"bias\"}"};
+      RejectUnknownKeys(w, {"flicker", "spatial", "bias"}, "fit.weights");
+      if (w.contains("flicker")) s.fit_weights.flicker = Number(w["flicker"], "flicker");
+      if (w.contains("spatial")) s.fit_weights.spatial = Number(w["spatial"], "spatial");
+      if (w.contains("bias")) s.fit_weights.bias = Number(w["bias"], "bias");
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
+SpecResult ParseSpec(std::string_view text, const std::string& source) {
+  SpecResult result;
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    // nlohmann reports the byte offset; turn it into a line.
+    const std::size_t at = std::min<std::size_t>(e.byte, text.size());
+    const int line = 1 + int(std::count(text.begin(), text.begin() + at, '\n'));
+    result.error = source + ":" + std::to_string(line) + ": not valid JSON (" + e.what() + ")";
+    return result;
+  }
+  try {
+    result.spec = ParseSpecObject(j);
+  } catch (const SpecError& e) {
+    const int line = e.key.empty() ? 0 : LineOfKey(text, e.key);
+    result.error = source + (line ? ":" + std::to_string(line) : "") + ": " + (e.key.empty() ? "" : e.key + ": ") +
+                   e.problem;
+  } catch (const json::exception& e) {
+    result.error = source + ": " + e.what();
+  }
+  return result;
+}
+
+SpecResult LoadSpec(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) {
+    SpecResult r;
+    r.error = path + ": cannot read the spec file";
+    return r;
+  }
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return ParseSpec(buffer.str(), path);
+}
+
+}  // namespace shimmer::experiments

@@ -1,0 +1,58 @@
+// An experiment spec: the cross product of scenes x materials x cameras x
+// variants (with parameter values) x derivative sources, at one resolution,
+// frame count and reference quality. Parsed and validated before any work.
+#pragma once
+
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace shimmer::experiments {
+
+struct VariantSweep {
+  std::string name;
+  // Parameter name -> values to take (a list, or a range expanded here).
+  std::map<std::string, std::vector<double>> params;
+};
+
+struct ReferenceQuality {
+  int spp = 8;             // N x N stratified samples per pixel
+  double tolerance = 0;    // > 0: adaptive to this relative standard error instead
+};
+
+struct MetricOptions {
+  bool highlight_mask = true;
+  int segment = 0;  // Welch segment length; 0: min(frames, 64)
+};
+
+struct FitWeights {
+  double flicker = 1, spatial = 1, bias = 1;
+};
+
+struct Spec {
+  std::string name;
+  std::vector<std::string> scenes;
+  std::vector<std::string> materials;
+  std::vector<std::string> cameras;
+  std::vector<VariantSweep> variants;
+  std::vector<std::string> derivatives{"quad"};
+  int width = 128, height = 128;
+  int frames = 32;
+  double fps = 30;
+  ReferenceQuality reference;
+  MetricOptions metrics;
+  FitWeights fit_weights;
+};
+
+struct SpecResult {
+  Spec spec;
+  std::string error;  // "<source>:<line>: <key>: <problem>", empty when fine
+  bool ok() const { return error.empty(); }
+};
+
+// `source` names the text in messages (usually the file name).
+SpecResult ParseSpec(std::string_view json_text, const std::string& source);
+SpecResult LoadSpec(const std::string& path);
+
+}  // namespace shimmer::experiments

@@ -1,0 +1,124 @@
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "job.h"
+#include "spec.h"
+
+namespace shimmer::experiments {
+namespace {
+
+const char* kSpec = R"({
+  "name": "t",
+  "scenes": ["sphere", "sphere-field"],
+  "materials": ["ggx:0.02", "beckmann:0.1"],
+  "cameras": ["orbit"],
+  "variants": [
+    "none",
+    {"name": "k16-beckmann-rect", "params": {"fp_max": [0.25, 1.0]}},
+    {"name": "tk19", "params": {"kappa": {"from": 0.01, "to": 1, "steps": 3, "scale": "log"},
+                                "sigma2": [0.1, 0.25]}},
+    "supersample-2"
+  ],
+  "derivatives": ["quad", "analytic"],
+  "size": [64, 32],
+  "frames": 8,
+  "reference": {"spp": 4}
+})";
+
+TEST(Spec, ParsesAndExpandsTheCrossProduct) {
+  SpecResult r = ParseSpec(kSpec, "t.json");
+  ASSERT_TRUE(r.ok()) << r.error;
+  EXPECT_EQ(r.spec.width, 64);
+  EXPECT_EQ(r.spec.height, 32);
+  const auto& kappa = r.spec.variants[2].params.at("kappa");
+  ASSERT_EQ(kappa.size(), 3u);
+  EXPECT_NEAR(kappa[1], 0.1, 1e-12);  // log range: geometric midpoint
+  // 2 scenes x 2 materials x 1 camera x (1 + 2 + 3*2 + 1) variant points x 2 derivative sources
+  const auto jobs = ExpandJobs(r.spec);
+  EXPECT_EQ(jobs.size(), 2u * 2 * 1 * 10 * 2);
+  std::set<std::string> ids;
+  for (const Job& j : jobs) ids.insert(JobId(j));
+  EXPECT_EQ(ids.size(), jobs.size()) << "every job has its own id";
+}
+
+TEST(Spec, IdsAreStableAndReferencesShared) {
+  const auto jobs = ExpandJobs(ParseSpec(kSpec, "t.json").spec);
+  const auto again = ExpandJobs(ParseSpec(kSpec, "t.json").spec);
+  for (size_t i = 0; i < jobs.size(); ++i) EXPECT_EQ(JobId(jobs[i]), JobId(again[i]));
+  // Same scene, material, camera: one reference for every variant and derivative source.
+  std::set<std::string> refs;
+  for (const Job& j : jobs) refs.insert(ReferenceId(j));
+  EXPECT_EQ(refs.size(), 2u * 2 * 1);
+  Job changed = jobs[0];
+  changed.params["fp_max"] = 0.5;
+  EXPECT_NE(JobId(changed), JobId(jobs[0]));
+  EXPECT_EQ(ReferenceId(changed), ReferenceId(jobs[0]));
+  EXPECT_EQ(Job::FromJson(jobs[5].ToJson()).ToJson(), jobs[5].ToJson());
+}
+
+TEST(Spec, ShardsPartitionTheJobs) {
+  const auto jobs = ExpandJobs(ParseSpec(kSpec, "t.json").spec);
+  std::multiset<std::string> seen;
+  for (int i = 0; i < 3; ++i)
+    for (const Job& j : ShardOf(jobs, i, 3)) seen.insert(JobId(j));
+  EXPECT_EQ(seen.size(), jobs.size());
+  for (const Job& j : jobs) EXPECT_EQ(seen.count(JobId(j)), 1u);
+  int i = 0, n = 0;
+  EXPECT_TRUE(ParseShard("2/5", &i, &n));
+  EXPECT_EQ(i, 2);
+  EXPECT_EQ(n, 5);
+  EXPECT_FALSE(ParseShard("5/5", &i, &n));
+  EXPECT_FALSE(ParseShard("1/0", &i, &n));
+  EXPECT_FALSE(ParseShard("a/b", &i, &n));
+  EXPECT_FALSE(ParseShard("1/2x", &i, &n));
+}
+
+std::string ErrorOf(std::string text) { return ParseSpec(text, "bad.json").error; }
+
+TEST(Spec, MalformedSpecsNameTheKeyAndLine) {
+  const std::string base_head = "{\n  \"name\": \"b\",\n  \"scenes\": [\"sphere\"],\n  \"materials\": [\"ggx:0.1\"],\n"
+                                "  \"cameras\": [\"orbit\"],\n";
+  std::string e = ErrorOf(base_head + "  \"variants\": [\"none\"],\n  \"frmes\": 8\n}");
+  EXPECT_NE(e.find("bad.json:7"), std::string::npos) << e;
+  EXPECT_NE(e.find("frmes: unknown key"), std::string::npos) << e;
+
+  e = ErrorOf(base_head + "  \"variants\": [\"k16-nope\"]\n}");
+  EXPECT_NE(e.find("bad.json:6: k16-nope: unknown variant"), std::string::npos) << e;
+
+  e = ErrorOf(base_head + "  \"variants\": [{\"name\": \"tk19\", \"params\": {\"fp_max\": [1]}}]\n}");
+  EXPECT_NE(e.find("fp_max"), std::string::npos) << e;
+  EXPECT_NE(e.find("has no parameter"), std::string::npos) << e;
+
+  e = ErrorOf(base_head + "  \"variants\": [\"none\"],\n  \"frames\": \"eight\"\n}");
+  EXPECT_NE(e.find("frames: must be a positive integer"), std::string::npos) << e;
+
+  e = ErrorOf("{\n  \"name\": \"b\",\n  \"scenes\": [],\n  \"materials\": [\"ggx:0.1\"],\n  \"cameras\": [\"orbit\"],\n"
+              "  \"variants\": [\"none\"]\n}");
+  EXPECT_NE(e.find("bad.json:3: scenes: is empty"), std::string::npos) << e;
+
+  e = ErrorOf(base_head + "  \"variants\": [\"none\"],\n  \"size\": [64, 64\n}");
+  EXPECT_NE(e.find("bad.json:8: not valid JSON"), std::string::npos) << e;
+
+  e = ErrorOf(base_head + "  \"variants\": [{\"name\": \"tk19\", \"params\": {\"kappa\": {\"from\": 0, \"to\": 1, "
+                          "\"steps\": 3, \"scale\": \"log\"}}}]\n}");
+  EXPECT_NE(e.find("log range needs from > 0"), std::string::npos) << e;
+
+  e = ErrorOf(base_head + "  \"variants\": [\"none\"],\n  \"derivatives\": [\"sobel\"]\n}");
+  EXPECT_NE(e.find("derivatives: must be quad"), std::string::npos) << e;
+
+  e = ErrorOf("{\"name\": \"b\", \"scenes\": [\"nowhere.json\"], \"materials\": [\"ggx:0.1\"], "
+              "\"cameras\": [\"orbit\"], \"variants\": [\"none\"]}");
+  EXPECT_NE(e.find("nowhere.json"), std::string::npos) << e;
+
+  e = ErrorOf("{\"name\": \"b\", \"scenes\": [\"sphere\"], \"materials\": [\"ggx:-1\"], "
+              "\"cameras\": [\"orbit\"], \"variants\": [\"none\"]}");
+  EXPECT_NE(e.find("ggx:-1"), std::string::npos) << e;
+
+  e = ErrorOf("{\"name\": \"b\", \"scenes\": [\"sphere\"], \"materials\": [\"ggx:0.1\"], "
+              "\"cameras\": [\"spin\"], \"variants\": [\"none\"]}");
+  EXPECT_NE(e.find("spin: unknown camera path"), std::string::npos) << e;
+}
+
+}  // namespace
+}  // namespace shimmer::experiments

@@ -1,0 +1,76 @@
+// All metrics of DESIGN.md "Metrics" in one streaming pass over a test
+// sequence and an optional reference: one frame of each resident (plus the
+// previous one for differences), the spectrum's L-frame ring, per-pixel
+// accumulators; EXR reading of frame t+1 overlaps the computing of frame t.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "shimmer/metrics/exr_sequence.h"
+#include "shimmer/metrics/highlight_mask.h"
+#include "shimmer/metrics/result.h"
+
+namespace shimmer::metrics {
+
+enum class FlickerSignal { kError, kTest };
+
+struct MetricsOptions {
+  std::filesystem::path test;
+  std::optional<std::filesystem::path> reference;
+  SequenceRequest request;  // --layer, --fps
+  std::optional<std::filesystem::path> mask_file;
+  bool highlight_mask = false;
+  HighlightMaskOptions highlight;
+  std::optional<FlickerSignal> signal;  // default: error with a reference, else test
+  int segment_length = 0;               // 0: min(N, 64)
+};
+
+// Called once per frame, in order, with the frames as read (luminance).
+// `other` is R_t with a reference, else T_{t-1} (T_0 for t = 0).
+using FrameObserver = std::function<Status(int t, const cv::Mat& test, const cv::Mat& other)>;
+
+struct FlickerResult {
+  std::string signal;  // "error" or "test"
+  int segment_length = 0;
+  int segments = 0;
+  std::vector<double> freq_hz, psd;
+  double band_low = 0, band_mid = 0, band_high = 0;
+  double flicker_index = 0;
+};
+
+struct MetricsReport {
+  std::string test, reference;  // as given
+  std::string layer, region;    // region: "frame", "mask:<file>" or "highlight"
+  int frames = 0, width = 0, height = 0;
+  long long pixels = 0;         // in the region
+  double fps = 0;
+  std::string fps_source;
+
+  double tv_test = 0;
+  std::optional<double> tv_ref, tv_err, tv_ratio, energy_bias, temporal_diff_err, rmse, relmse;
+  std::vector<double> energy_bias_per_frame, rmse_per_frame;  // with a reference
+  double temporal_diff_test = 0;  // mean over t >= 1 and M of |T_t - T_{t-1}|
+  std::optional<double> warp_err;  // when the test frames carry motion.X/Y
+  long long nan_pixels = 0;        // region pixels with a non-finite sample anywhere
+  long long nan_samples = 0;       // (pixel, frame) samples that were non-finite
+  FlickerResult flicker;
+
+  // Per-pixel maps (CV_32F), 0 outside the region and at excluded pixels.
+  cv::Mat region_mask;  // CV_8U 0/1, after exclusion of non-finite pixels
+  cv::Mat tv_test_map, tv_ref_map, tv_err_map, energy_bias_map;
+  std::vector<std::string> warnings;
+};
+
+Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameObserver& observer = {});
+
+// The --json object; reference-relative keys only with a reference.
+nlohmann::json ToJson(const MetricsReport& report);
+
+}  // namespace shimmer::metrics

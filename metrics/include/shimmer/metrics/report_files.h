@@ -1,0 +1,27 @@
+// The --out directory: everything a person needs to look at one run.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "shimmer/metrics/metrics_report.h"
+#include "shimmer/metrics/result.h"
+
+namespace shimmer::metrics {
+
+// Writes into `dir` (created if needed), each file through a temporary name:
+//   metrics.json                       the --json object
+//   tv_test.exr/.png  tv_ref.*  tv_err.*  energy_bias.*   per-pixel maps
+//                                      (EXR: one float channel Y; PNG: heatmap + legend)
+//   spectrum.csv, spectrum.gp          the flicker PSD and the gnuplot script that plots it
+//   spectrum.png                       when gnuplot is installed (else a warning)
+// Non-fatal problems (no gnuplot) are appended to `warnings`.
+Status WriteReportFiles(const MetricsReport& report, const std::filesystem::path& dir,
+                        std::vector<std::string>* warnings);
+
+// Just the spectrum CSV + script (+ PNG through gnuplot when present).
+Status WriteSpectrumPlot(const MetricsReport& report, const std::filesystem::path& dir,
+                         std::vector<std::string>* warnings);
+
+}  // namespace shimmer::metrics

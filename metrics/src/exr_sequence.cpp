@@ -1,0 +1,410 @@
+#include "shimmer/metrics/exr_sequence.h"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputPart.h>
+#include <ImfMultiPartInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfPartType.h>
+#include <Imath/half.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "shimmer/metrics/atomic_file.h"
+
+namespace shimmer::metrics {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct ChannelRef {
+  int part = 0;
+  std::string name;  // full channel name inside the part
+};
+// layer -> component ("R", "G", "B", "Y", "X", ...) -> where it lives.
+using LayerMap = std::map<std::string, std::map<std::string, ChannelRef>>;
+
+bool IsBeautyPartName(const std::string& name) {
+  return name.empty() || name == "rgba" || name == "RGBA" || name == kBeautyLayer;
+}
+
+// Layer naming follows the OpenEXR multi-view/layer convention ("layer.C"):
+// the last '.' separates the component. In multi-part files an unprefixed
+// channel belongs to the part's name, so that a part "specular" with R,G,B is
+// the same layer as channels "specular.R/G/B" in a single-part file.
+LayerMap MapLayers(const Imf::MultiPartInputFile& file) {
+  LayerMap layers;
+  const int parts = file.parts();
+  for (int p = 0; p < parts; ++p) {
+    const Imf::Header& header = file.header(p);
+    std::string part_layer = kBeautyLayer;
+    if (parts > 1 && header.hasName() && !IsBeautyPartName(header.name())) part_layer = header.name();
+    for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+      std::string full = it.name();
+      auto dot = full.rfind('.');
+      std::string layer = dot == std::string::npos ? part_layer : full.substr(0, dot);
+      std::string component = dot == std::string::npos ? full : full.substr(dot + 1);
+      layers[layer].emplace(component, ChannelRef{p, full});
+    }
+  }
+  return layers;
+}
+
+bool HasLuminance(const std::map<std::string, ChannelRef>& components) {
+  return (components.count("R") && components.count("G") && components.count("B")) || components.count("Y");
+}
+
+bool HasMotion(const LayerMap& layers) {
+  auto it = layers.find("motion");
+  return it != layers.end() && it->second.count("X") && it->second.count("Y");
+}
+
+std::vector<std::string> LuminanceLayers(const LayerMap& layers) {
+  std::vector<std::string> names;
+  for (const auto& [name, components] : layers)
+    if (HasLuminance(components)) names.push_back(name);
+  return names;
+}
+
+std::string Join(const std::vector<std::string>& items) {
+  std::string out;
+  for (const std::string& s : items) out += (out.empty() ? "" : ", ") + s;
+  return out.empty() ? "none" : out;
+}
+
+std::string DescribeExrFailure(const fs::path& file, const std::exception& e) {
+  std::error_code ec;
+  if (!fs::exists(file, ec)) return file.string() + ": no such file";
+  return file.string() + ": not a readable EXR file (" + e.what() + ")";
+}
+
+// Size of the part that holds `layer`; all parts of a frame must agree on it.
+struct DataWindow {
+  int min_x = 0, min_y = 0, width = 0, height = 0;
+};
+DataWindow WindowOf(const Imf::Header& header) {
+  const Imath::Box2i& dw = header.dataWindow();
+  return {dw.min.x, dw.min.y, dw.max.x - dw.min.x + 1, dw.max.y - dw.min.y + 1};
+}
+
+Result<std::vector<fs::path>> ListExrFiles(const fs::path& dir) {
+  std::error_code ec;
+  std::vector<fs::path> frames;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (!it->is_regular_file(ec)) continue;
+    std::string ext = it->path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (ext == ".exr") frames.push_back(it->path());
+  }
+  if (ec) return Result<std::vector<fs::path>>::Failure(dir.string() + ": cannot list directory (" + ec.message() + ")");
+  std::sort(frames.begin(), frames.end(),
+            [](const fs::path& a, const fs::path& b) { return a.filename().string() < b.filename().string(); });
+  return frames;
+}
+
+// Header-level check of one frame: opens it, maps its layers.
+Result<LayerMap> ReadLayerMap(const fs::path& file, DataWindow* window) {
+  try {
+    Imf::MultiPartInputFile in(file.c_str());
+    LayerMap layers = MapLayers(in);
+    if (window) *window = WindowOf(in.header(0));
+    for (int p = 0; p < in.parts(); ++p) {
+      const std::string type = in.header(p).hasType() ? in.header(p).type() : Imf::SCANLINEIMAGE;
+      if (type == Imf::DEEPSCANLINE || type == Imf::DEEPTILE)
+        return Result<LayerMap>::Failure(file.string() + ": deep EXR images are not supported");
+    }
+    return layers;
+  } catch (const std::exception& e) {
+    return Result<LayerMap>::Failure(DescribeExrFailure(file, e));
+  }
+}
+
+}  // namespace
+
+Result<std::vector<std::string>> ListLayers(const fs::path& file) {
+  auto layers = ReadLayerMap(file, nullptr);
+  if (!layers) return Result<std::vector<std::string>>::Failure(layers.error());
+  return LuminanceLayers(*layers);
+}
+
+Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& request) {
+  using R = Result<ExrSequence>;
+  ExrSequence seq;
+  seq.source = path;
+  std::error_code ec;
+  std::optional<double> json_fps;
+  if (fs::is_directory(path, ec)) {
+    auto files = ListExrFiles(path);
+    if (!files) return R::Failure(files.error());
+    seq.frames = std::move(*files);
+    if (seq.frames.empty()) return R::Failure(path.string() + ": no .exr frames in this directory");
+    fs::path sidecar = path / "sequence.json";
+    if (fs::is_regular_file(sidecar, ec)) {
+      // The renderer writes sequence.json beside its frames; honour its fps.
+      try {
+        std::ifstream in(sidecar);
+        nlohmann::json j = nlohmann::json::parse(in);
+        if (j.contains("fps") && j["fps"].is_number()) json_fps = j["fps"].get<double>();
+      } catch (const std::exception& e) {
+        return R::Failure(sidecar.string() + ": not valid JSON (" + e.what() + ")");
+      }
+    }
+  } else if (fs::is_regular_file(path, ec) && path.extension() == ".json") {
+    nlohmann::json j;
+    try {
+      std::ifstream in(path);
+      j = nlohmann::json::parse(in);
+    } catch (const std::exception& e) {
+      return R::Failure(path.string() + ": not valid JSON (" + e.what() + ")");
+    }
+    if (!j.is_object()) return R::Failure(path.string() + ": expected a JSON object");
+    if (j.contains("fps")) {
+      if (!j["fps"].is_number()) return R::Failure(path.string() + ": \"fps\" must be a number");
+      json_fps = j["fps"].get<double>();
+    }
+    fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+    if (j.contains("frames")) {
+      if (!j["frames"].is_array()) return R::Failure(path.string() + ": \"frames\" must be an array of file names");
+      for (const auto& f : j["frames"]) {
+        if (!f.is_string()) return R::Failure(path.string() + ": \"frames\" must be an array of file names");
+        seq.frames.push_back(dir / f.get<std::string>());
+      }
+    } else {
+      auto files = ListExrFiles(dir);
+      if (!files) return R::Failure(files.error());
+      seq.frames = std::move(*files);
+    }
+    if (seq.frames.empty()) return R::Failure(path.string() + ": lists no frames and its directory has no .exr files");
+  } else if (!fs::exists(path, ec)) {
+    return R::Failure(path.string() + ": no such file or directory");
+  } else {
+    return R::Failure(path.string() + ": expected a directory of EXR frames or a sequence.json");
+  }
+
+  if (json_fps) {
+    if (!(std::isfinite(*json_fps) && *json_fps > 0)) return R::Failure(path.string() + ": fps must be > 0");
+    seq.fps = *json_fps;
+    seq.fps_source = "sequence.json";
+    if (request.fps && *request.fps != *json_fps)
+      seq.warnings.push_back("--fps " + std::to_string(*request.fps) + " ignored: sequence.json says " +
+                             std::to_string(*json_fps));
+  } else if (request.fps) {
+    seq.fps = *request.fps;
+    seq.fps_source = "--fps";
+  } else {
+    seq.fps = 60;
+    seq.fps_source = "default";
+  }
+
+  // Frame 0 decides the layer and size; every other frame must match it.
+  DataWindow first;
+  auto layers0 = ReadLayerMap(seq.frames[0], &first);
+  if (!layers0) return R::Failure(layers0.error());
+  seq.layers = LuminanceLayers(*layers0);
+  if (request.layer.empty()) {
+    if (layers0->count("specular") && HasLuminance(layers0->at("specular")))
+      seq.layer = "specular";
+    else if (layers0->count(kBeautyLayer) && HasLuminance(layers0->at(kBeautyLayer)))
+      seq.layer = kBeautyLayer;
+    else if (seq.layers.size() == 1)
+      seq.layer = seq.layers[0];
+    else
+      return R::Failure(seq.frames[0].string() + ": no 'specular' layer and no R,G,B channels; pick one with --layer (" +
+                        Join(seq.layers) + ")");
+  } else {
+    seq.layer = request.layer;
+  }
+  seq.width = first.width;
+  seq.height = first.height;
+  seq.has_motion = HasMotion(*layers0);
+
+  for (const fs::path& frame : seq.frames) {
+    DataWindow window;
+    auto layers = ReadLayerMap(frame, &window);
+    if (!layers) return R::Failure(layers.error());
+    if (window.width != seq.width || window.height != seq.height)
+      return R::Failure(frame.string() + ": frame is " + std::to_string(window.width) + "x" +
+                        std::to_string(window.height) + " but " + seq.frames[0].filename().string() + " is " +
+                        std::to_string(seq.width) + "x" + std::to_string(seq.height));
+    auto it = layers->find(seq.layer);
+    if (it == layers->end())
+      return R::Failure(frame.string() + ": no layer '" + seq.layer + "' (layers: " + Join(LuminanceLayers(*layers)) +
+                        ")");
+    if (!HasLuminance(it->second)) {
+      std::vector<std::string> present;
+      for (const auto& [component, ref] : it->second) present.push_back(ref.name);
+      return R::Failure(frame.string() + ": layer '" + seq.layer + "' lacks channel R, G or B (has " + Join(present) +
+                        ")");
+    }
+    seq.has_motion = seq.has_motion && HasMotion(*layers);
+  }
+  return seq;
+}
+
+Result<Frame> ReadFrame(const fs::path& file, const std::string& layer, int width, int height, bool with_motion) {
+  using R = Result<Frame>;
+  try {
+    Imf::MultiPartInputFile in(file.c_str());
+    LayerMap layers = MapLayers(in);
+    auto it = layers.find(layer);
+    if (it == layers.end() || !HasLuminance(it->second))
+      return R::Failure(file.string() + ": no layer '" + layer + "' with R,G,B (layers: " +
+                        Join(LuminanceLayers(layers)) + ")");
+    const auto& components = it->second;
+    const bool rgb = components.count("R") && components.count("G") && components.count("B");
+    if (with_motion && !HasMotion(layers)) return R::Failure(file.string() + ": no motion.X/motion.Y channels");
+
+    // Component planes to fill, grouped by part below.
+    std::vector<std::pair<ChannelRef, cv::Mat*>> wanted;
+    cv::Mat r(height, width, CV_32F), g, b, mx, my;
+    if (rgb) {
+      g.create(height, width, CV_32F);
+      b.create(height, width, CV_32F);
+      wanted = {{components.at("R"), &r}, {components.at("G"), &g}, {components.at("B"), &b}};
+    } else {
+      wanted = {{components.at("Y"), &r}};
+    }
+    if (with_motion) {
+      mx.create(height, width, CV_32F);
+      my.create(height, width, CV_32F);
+      wanted.push_back({layers.at("motion").at("X"), &mx});
+      wanted.push_back({layers.at("motion").at("Y"), &my});
+    }
+    std::set<int> parts;
+    for (const auto& w : wanted) parts.insert(w.first.part);
+    for (int p : parts) {
+      Imf::InputPart part(in, p);
+      DataWindow window = WindowOf(part.header());
+      if (window.width != width || window.height != height)
+        return R::Failure(file.string() + ": frame is " + std::to_string(window.width) + "x" +
+                          std::to_string(window.height) + ", expected " + std::to_string(width) + "x" +
+                          std::to_string(height));
+      Imf::FrameBuffer fb;
+      for (const auto& [ref, plane] : wanted) {
+        if (ref.part != p) continue;
+        const Imf::Channel* ch = part.header().channels().findChannel(ref.name);
+        if (ch->xSampling != 1 || ch->ySampling != 1)
+          return R::Failure(file.string() + ": channel " + ref.name + " is subsampled; not supported");
+        // OpenEXR addresses pixels in data-window coordinates; shift the base
+        // so that the window's corner lands on the plane's first element.
+        char* base = reinterpret_cast<char*>(plane->ptr<float>()) -
+                     (static_cast<std::ptrdiff_t>(window.min_y) * width + window.min_x) * sizeof(float);
+        fb.insert(ref.name, Imf::Slice(Imf::FLOAT, base, sizeof(float), width * sizeof(float)));
+      }
+      part.setFrameBuffer(fb);
+      part.readPixels(window.min_y, window.min_y + height - 1);
+    }
+    Frame frame;
+    if (rgb) {
+      frame.luminance.create(height, width, CV_32F);
+      for (int y = 0; y < height; ++y) {
+        const float *pr = r.ptr<float>(y), *pg = g.ptr<float>(y), *pb = b.ptr<float>(y);
+        float* out = frame.luminance.ptr<float>(y);
+        for (int x = 0; x < width; ++x)
+          out[x] = static_cast<float>(kLumaR * pr[x] + kLumaG * pg[x] + kLumaB * pb[x]);
+      }
+    } else {
+      frame.luminance = r;
+    }
+    if (with_motion) cv::merge(std::vector<cv::Mat>{mx, my}, frame.motion);
+    return frame;
+  } catch (const std::exception& e) {
+    return R::Failure(DescribeExrFailure(file, e));
+  }
+}
+
+Result<cv::Mat> ReadMask(const fs::path& file, int width, int height) {
+  using R = Result<cv::Mat>;
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) return R::Failure(file.string() + ": no such mask file");
+  cv::Mat image;
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".exr") {
+    auto layers = ListLayers(file);
+    if (!layers) return R::Failure(layers.error());
+    std::string layer = layers->empty() ? "" : layers->front();
+    for (const std::string& l : *layers)
+      if (l == kBeautyLayer) layer = l;
+    if (layer.empty()) return R::Failure(file.string() + ": mask EXR has no R,G,B or Y channels");
+    try {
+      Imf::MultiPartInputFile in(file.c_str());
+      DataWindow w = WindowOf(in.header(0));
+      if (w.width != width || w.height != height)
+        return R::Failure(file.string() + ": mask is " + std::to_string(w.width) + "x" + std::to_string(w.height) +
+                          " but the frames are " + std::to_string(width) + "x" + std::to_string(height));
+    } catch (const std::exception& e) {
+      return R::Failure(DescribeExrFailure(file, e));
+    }
+    auto frame = ReadFrame(file, layer, width, height, false);
+    if (!frame) return R::Failure(frame.error());
+    image = frame->luminance;
+  } else {
+    image = cv::imread(file.string(), cv::IMREAD_UNCHANGED | cv::IMREAD_ANYDEPTH);
+    if (image.empty()) return R::Failure(file.string() + ": not an image OpenCV can read");
+  }
+  if (image.cols != width || image.rows != height)
+    return R::Failure(file.string() + ": mask is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                      " but the frames are " + std::to_string(width) + "x" + std::to_string(height));
+  std::vector<cv::Mat> channels;
+  cv::split(image, channels);
+  cv::Mat inside = cv::Mat::zeros(height, width, CV_8U);
+  for (const cv::Mat& c : channels) {
+    cv::Mat as_float;
+    c.convertTo(as_float, CV_32F);
+    // NaN compares unequal to 0 and would count as inside; only finite nonzero is in.
+    cv::Mat nonzero = (as_float != 0) & (as_float == as_float);
+    inside |= nonzero;
+  }
+  return cv::Mat(inside / 255);
+}
+
+Status WriteExr(const fs::path& file, const std::vector<ExrChannel>& channels, ExrCompression compression) {
+  if (channels.empty()) return Status::Failure(file.string() + ": no channels to write");
+  const int width = channels[0].plane.cols, height = channels[0].plane.rows;
+  fs::path temporary = TemporaryPathFor(file);
+  try {
+    Imf::Header header(width, height);
+    header.compression() = compression == ExrCompression::kZip ? Imf::ZIP_COMPRESSION : Imf::NO_COMPRESSION;
+    Imf::FrameBuffer fb;
+    std::vector<std::vector<Imath::half>> halves;
+    halves.reserve(channels.size());
+    for (const ExrChannel& c : channels) {
+      if (c.plane.type() != CV_32F || c.plane.cols != width || c.plane.rows != height || !c.plane.isContinuous())
+        return Status::Failure(file.string() + ": channel " + c.name + " must be a continuous CV_32F " +
+                               std::to_string(width) + "x" + std::to_string(height) + " plane");
+      header.channels().insert(c.name, Imf::Channel(c.half ? Imf::HALF : Imf::FLOAT));
+      if (c.half) {
+        auto& h = halves.emplace_back(static_cast<size_t>(width) * height);
+        const float* src = c.plane.ptr<float>();
+        for (size_t i = 0; i < h.size(); ++i) h[i] = Imath::half(src[i]);
+        fb.insert(c.name, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(h.data()), sizeof(Imath::half),
+                                     width * sizeof(Imath::half)));
+      } else {
+        fb.insert(c.name, Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(c.plane.ptr<float>())),
+                                     sizeof(float), width * sizeof(float)));
+      }
+    }
+    {
+      Imf::OutputFile out(temporary.c_str(), header);
+      out.setFrameBuffer(fb);
+      out.writePixels(height);
+    }
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    fs::remove(temporary, ec);
+    return Status::Failure(file.string() + ": cannot write EXR (" + e.what() + ")");
+  }
+  return CommitFile(temporary, file);
+}
+
+}  // namespace shimmer::metrics

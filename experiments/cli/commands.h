@@ -16,6 +16,8 @@ struct UsageError : std::runtime_error {
 
 void AddVariantsCommand(CLI::App& app);
 void AddNdfCommand(CLI::App& app);
+void AddRunCommand(CLI::App& app);
+void AddMergeCommand(CLI::App& app);
 void AddRenderCommand(CLI::App& app);
 
 }  // namespace shimmer::cli

@@ -11,6 +11,8 @@ int main(int argc, char** argv) {
   shimmer::cli::AddVariantsCommand(app);
   shimmer::cli::AddNdfCommand(app);
   shimmer::cli::AddRenderCommand(app);
+  shimmer::cli::AddRunCommand(app);
+  shimmer::cli::AddMergeCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -12,7 +12,8 @@ json Job::ToJson() const {
   return {{"scene", scene},   {"material", material},       {"camera", camera},
           {"variant", variant}, {"params", params},         {"derivatives", derivatives},
           {"width", width},   {"height", height},           {"frames", frames},
-          {"fps", fps},       {"reference_spp", reference.spp}, {"reference_tolerance", reference.tolerance}};
+          {"fps", fps},       {"reference_spp", reference.spp}, {"reference_tolerance", reference.tolerance},
+          {"highlight_mask", metrics.highlight_mask}, {"segment", metrics.segment}};
 }
 
 Job Job::FromJson(const json& j) {
@@ -29,6 +30,8 @@ Job Job::FromJson(const json& j) {
   job.fps = j.at("fps");
   job.reference.spp = j.at("reference_spp");
   job.reference.tolerance = j.at("reference_tolerance");
+  job.metrics.highlight_mask = j.at("highlight_mask");
+  job.metrics.segment = j.at("segment");
   return job;
 }
 
@@ -72,6 +75,7 @@ std::vector<Job> ExpandJobs(const Spec& spec) {
               job.frames = spec.frames;
               job.fps = spec.fps;
               job.reference = spec.reference;
+              job.metrics = spec.metrics;
               jobs.push_back(std::move(job));
             }
   return jobs;

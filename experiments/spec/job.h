@@ -24,6 +24,7 @@ struct Job {
   int width = 0, height = 0, frames = 0;
   double fps = 0;
   ReferenceQuality reference;
+  MetricOptions metrics;  // part of the id: the stored numbers depend on them
 
   nlohmann::json ToJson() const;
   static Job FromJson(const nlohmann::json& j);

@@ -20,6 +20,7 @@ CREATE TABLE IF NOT EXISTS jobs (
   reference_spp INTEGER, reference_tolerance REAL,
   tv_ratio REAL, tv_err REAL, energy_bias REAL, temporal_diff_err REAL, relmse REAL, flicker_index REAL,
   metrics TEXT NOT NULL,
+  job TEXT NOT NULL,
   gpu_ms_per_frame REAL, wall_s REAL,
   revision TEXT, core_version TEXT,
   finished_at TEXT DEFAULT (datetime('now'))
@@ -80,8 +81,8 @@ std::string ResultStore::Insert(const JobResult& r) {
   sqlite3_prepare_v2(db_,
                      "INSERT OR REPLACE INTO jobs (id, reference_id, scene, material, camera, variant, params, "
                      "derivatives, width, height, frames, fps, reference_spp, reference_tolerance, tv_ratio, tv_err, "
-                     "energy_bias, temporal_diff_err, relmse, flicker_index, metrics, gpu_ms_per_frame, wall_s, "
-                     "revision, core_version) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
+                     "energy_bias, temporal_diff_err, relmse, flicker_index, metrics, job, gpu_ms_per_frame, wall_s, "
+                     "revision, core_version) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
                      -1, &s.stmt, nullptr);
   int i = 1;
   auto text = [&](const std::string& v) { sqlite3_bind_text(s.stmt, i++, v.c_str(), -1, SQLITE_TRANSIENT); };
@@ -108,6 +109,7 @@ std::string ResultStore::Insert(const JobResult& r) {
   for (const char* key : {"tv_ratio", "tv_err", "energy_bias", "temporal_diff_err", "relmse"}) real(NumberOr(r.metrics, key));
   real(r.metrics.contains("flicker") ? NumberOr(r.metrics["flicker"], "flicker_index") : std::nan(""));
   text(r.metrics.dump());
+  text(r.job.ToJson().dump());
   real(r.gpu_ms_per_frame);
   real(r.wall_s);
   text(r.revision);
@@ -126,7 +128,7 @@ std::vector<JobResult> ResultStore::All() {
   sqlite3_prepare_v2(db_,
                      "SELECT id, reference_id, scene, material, camera, variant, params, derivatives, width, height, "
                      "frames, fps, reference_spp, reference_tolerance, metrics, gpu_ms_per_frame, wall_s, revision, "
-                     "core_version FROM jobs ORDER BY id",
+                     "core_version, job FROM jobs ORDER BY id",
                      -1, &s.stmt, nullptr);
   auto str = [&](int c) {
     const unsigned char* t = sqlite3_column_text(s.stmt, c);
@@ -153,6 +155,7 @@ std::vector<JobResult> ResultStore::All() {
     r.wall_s = sqlite3_column_double(s.stmt, 16);
     r.revision = str(17);
     r.core_version = str(18);
+    r.job = Job::FromJson(nlohmann::json::parse(str(19)));  // the columns above are for SQL users
     rows.push_back(std::move(r));
   }
   return rows;

@@ -245,7 +245,7 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
 
   // Pixels with any non-finite sample leave the region for every per-pixel
   // metric, so that all of them describe the same set of pixels.
-  cv::Mat good = region & (excluded == 0);
+  cv::Mat good = (region != 0) & (excluded == 0);
   good /= 255;
   const long long used = cv::countNonZero(good);
   report.nan_pixels = region_pixels - used;

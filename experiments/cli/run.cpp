@@ -1,0 +1,86 @@
+// `shimmer run SPEC`: every job of a spec, resumable, optionally one shard.
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include "commands.h"
+#include "job.h"
+#include "runner.h"
+#include "spec.h"
+
+namespace shimmer::cli {
+
+namespace {
+
+struct RunCliOptions {
+  std::string spec;
+  std::string db;
+  std::string work;
+  std::string shard = "0/1";
+  bool keep_frames = false;
+  std::string device;
+};
+
+std::string Duration(double s) {
+  char buf[32];
+  if (s >= 3600)
+    std::snprintf(buf, sizeof buf, "%dh%02dm", int(s / 3600), int(s / 60) % 60);
+  else
+    std::snprintf(buf, sizeof buf, "%dm%02ds", int(s / 60), int(s) % 60);
+  return buf;
+}
+
+void PrintProgress(const experiments::RunProgress& p, bool tty) {
+  const int width = 30;
+  const int filled = p.total ? width * p.done / p.total : width;
+  std::string bar(filled, '#');
+  bar.resize(width, '.');
+  std::fprintf(stderr, "%s[%s] %d/%d jobs, %d left (%d already done), elapsed %s, ETA %s  %s%s",
+               tty ? "\r" : "", bar.c_str(), p.done, p.total, p.total - p.done, p.skipped,
+               Duration(p.elapsed_s).c_str(), Duration(p.eta_s).c_str(), p.current.c_str(), tty ? "\033[K" : "\n");
+  if (tty && p.done == p.total) std::fprintf(stderr, "\n");
+}
+
+void Run(const RunCliOptions& o) {
+  const experiments::SpecResult spec = experiments::LoadSpec(o.spec);
+  if (!spec.ok()) throw UsageError(spec.error);
+  experiments::RunOptions ro;
+  if (!experiments::ParseShard(o.shard, &ro.shard_index, &ro.shard_count))
+    throw UsageError("--shard must be i/n with 0 <= i < n, got '" + o.shard + "'");
+  const std::filesystem::path base = std::filesystem::path("runs") / spec.spec.name;
+  ro.db_path = o.db.empty() ? (base / "results.db").string() : o.db;
+  ro.work_dir = o.work.empty() ? (base / "frames").string() : o.work;
+  ro.keep_frames = o.keep_frames;
+  ro.device = o.device;
+  std::error_code ec;
+  std::filesystem::create_directories(std::filesystem::path(ro.db_path).parent_path().empty()
+                                          ? "."
+                                          : std::filesystem::path(ro.db_path).parent_path(),
+                                      ec);
+  std::filesystem::create_directories(ro.work_dir, ec);
+  if (ec) throw UsageError(ro.work_dir + ": cannot create the frame directory: " + ec.message());
+  const bool tty = isatty(fileno(stderr));
+  ro.progress = [tty](const experiments::RunProgress& p) { PrintProgress(p, tty); };
+  const auto jobs = experiments::ExpandJobs(spec.spec);
+  const experiments::RunSummary s = experiments::RunJobs(jobs, ro);
+  if (!s.error.empty()) throw std::runtime_error(s.error);
+  std::printf("%s: %d jobs in shard %s (%d computed, %d already done) -> %s\n", spec.spec.name.c_str(), s.total,
+              o.shard.c_str(), s.computed, s.skipped, ro.db_path.c_str());
+}
+
+}  // namespace
+
+void AddRunCommand(CLI::App& app) {
+  auto o = std::make_shared<RunCliOptions>();
+  CLI::App* cmd = app.add_subcommand("run", "Run every job of a spec (resumes; skips finished jobs)");
+  cmd->add_option("spec", o->spec, "Spec JSON file")->required();
+  cmd->add_option("--db", o->db, "Results store (default runs/<spec name>/results.db)");
+  cmd->add_option("--work", o->work, "Frame cache directory (default runs/<spec name>/frames)");
+  cmd->add_option("--shard", o->shard, "Run the deterministic slice i/n of the jobs")->capture_default_str();
+  cmd->add_flag("--keep-frames", o->keep_frames, "Keep rendered frames after measuring");
+  cmd->add_option("--device", o->device, "Vulkan device name substring");
+  cmd->callback([o] { Run(*o); });
+}
+
+}  // namespace shimmer::cli

@@ -1,0 +1,129 @@
+// `shimmer run` end to end on a tiny spec (lavapipe): killing the runner at
+// any moment and starting it again recomputes only unfinished jobs, and
+// shards merged equal one unsharded run.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "result_store.h"
+
+namespace shimmer::experiments {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Workspace {
+  fs::path dir = fs::temp_directory_path() /
+                 ("shimmer-run-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+  Workspace() {
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::ofstream(dir / "tiny.json") << R"({
+      "name": "tiny",
+      "scenes": ["sphere"],
+      "materials": ["ggx:0.02", "ggx:0.2"],
+      "cameras": ["orbit"],
+      "variants": ["none", {"name": "k16-beckmann-rect", "params": {"fp_max": [0.25, 1.0]}}, "tk19"],
+      "size": [24, 24],
+      "frames": 5,
+      "reference": {"spp": 2},
+      "metrics": {"highlight_mask": false}
+    })";
+  }
+  ~Workspace() { fs::remove_all(dir); }
+  std::string Run(const std::string& args) const {
+    return "cd " + dir.string() + " && exec " + SHIMMER_EXE + " run tiny.json " + args + " >>log.txt 2>&1";
+  }
+};
+
+std::map<std::string, nlohmann::json> Rows(const fs::path& db) {
+  auto [store, error] = ResultStore::Open(db.string());
+  EXPECT_TRUE(store) << error;
+  std::map<std::string, nlohmann::json> rows;
+  if (store)
+    for (const JobResult& r : store->All()) rows[r.id] = r.metrics;
+  return rows;
+}
+
+TEST(RunCli, KilledRunResumesWithoutRecomputingOrCorrupting) {
+  Workspace ws;
+  // Reference: one uninterrupted run.
+  ASSERT_EQ(std::system(ws.Run("--db full.db --work full").c_str()), 0);
+  const auto full = Rows(ws.dir / "full.db");
+  ASSERT_EQ(full.size(), 8u);
+
+  // Kill the runner with SIGKILL at several moments, then let it finish.
+  // The delays land in spec loading, in the first reference render, and mid-run.
+  for (int delay_ms : {100, 900, 1800}) {
+    pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      execl("/bin/sh", "sh", "-c", ws.Run("--db part.db --work part").c_str(), nullptr);
+      _exit(127);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+    kill(pid, SIGKILL);
+    int status = 0;
+    waitpid(pid, &status, 0);
+  }
+  // Whatever was killed mid-write left no sequence under a final name.
+  if (fs::exists(ws.dir / "part"))
+  for (const auto& entry : fs::directory_iterator(ws.dir / "part"))
+    if (entry.path().extension() != ".partial")
+      EXPECT_TRUE(fs::exists(entry.path() / "sequence.json")) << entry.path();
+  const auto before = Rows(ws.dir / "part.db");
+  std::printf("rows finished before the resume: %zu of %zu\n", before.size(), full.size());
+  ASSERT_EQ(std::system(ws.Run("--db part.db --work part").c_str()), 0);
+  const auto after = Rows(ws.dir / "part.db");
+  ASSERT_EQ(after.size(), full.size());
+  for (const auto& [id, metrics] : before) EXPECT_EQ(after.at(id), metrics) << "finished row rewritten: " << id;
+  for (const auto& [id, metrics] : full) {
+    ASSERT_TRUE(after.count(id)) << id;
+    EXPECT_EQ(after.at(id).at("tv_err"), metrics.at("tv_err")) << id;
+  }
+  // A second run finds everything done.
+  std::ifstream log(ws.dir / "log.txt");
+  std::string text((std::istreambuf_iterator<char>(log)), {});
+  ASSERT_EQ(std::system(ws.Run("--db part.db --work part").c_str()), 0);
+  std::ifstream log2(ws.dir / "log.txt");
+  std::string text2((std::istreambuf_iterator<char>(log2)), {});
+  EXPECT_NE(text2.find("(0 computed, 8 already done)"), std::string::npos) << text2.substr(text.size());
+}
+
+TEST(RunCli, ShardsMergedEqualOneRun) {
+  Workspace ws;
+  ASSERT_EQ(std::system(ws.Run("--db full.db --work full").c_str()), 0);
+  for (int i = 0; i < 3; ++i)
+    ASSERT_EQ(std::system(ws.Run("--shard " + std::to_string(i) + "/3 --db s" + std::to_string(i) + ".db --work s").c_str()), 0);
+  ASSERT_EQ(std::system(("cd " + ws.dir.string() + " && " + SHIMMER_EXE + " merge s0.db s1.db s2.db -o all.db >>log.txt 2>&1").c_str()), 0);
+  const auto full = Rows(ws.dir / "full.db");
+  const auto merged = Rows(ws.dir / "all.db");
+  ASSERT_EQ(merged.size(), full.size());
+  for (const auto& [id, metrics] : full) {
+    ASSERT_TRUE(merged.count(id)) << id;
+    EXPECT_EQ(merged.at(id).at("tv_ratio"), metrics.at("tv_ratio")) << id;
+    EXPECT_EQ(merged.at(id).at("flicker").at("flicker_index"), metrics.at("flicker").at("flicker_index")) << id;
+  }
+}
+
+TEST(RunCli, MalformedSpecIsRejectedBeforeAnyWork) {
+  Workspace ws;
+  std::ofstream(ws.dir / "bad.json") << "{\n \"name\": \"b\",\n \"scenes\": [\"sphere\"],\n \"materials\": [\"ggx:0.1\"],\n"
+                                        " \"cameras\": [\"orbit\"],\n \"variants\": [\"nope\"]\n}\n";
+  const int rc = std::system(("cd " + ws.dir.string() + " && " + SHIMMER_EXE + " run bad.json >out.txt 2>&1").c_str());
+  EXPECT_EQ(WEXITSTATUS(rc), 2);
+  std::ifstream out(ws.dir / "out.txt");
+  std::string text((std::istreambuf_iterator<char>(out)), {});
+  EXPECT_NE(text.find("bad.json:6: nope: unknown variant"), std::string::npos) << text;
+  EXPECT_FALSE(fs::exists(ws.dir / "runs"));
+}
+
+}  // namespace
+}  // namespace shimmer::experiments

@@ -173,13 +173,17 @@ Box Bounds(const Primitive& p) {
 
 struct BvhNode {
   Box box;
-  int first = 0;  // left child or first primitive
-  int count = 0;  // 0: interior
+  int skip = 0;    // the node after this subtree
+  int first = 0;   // first primitive (leaves)
+  int count = 0;   // 0: interior
 };
 
-// Median split on the widest centroid axis; children of a node are adjacent.
-void BuildNode(std::vector<BvhNode>& nodes, int index, std::vector<int>& order, int begin, int end,
+// Median split on the widest centroid axis, nodes appended in depth-first
+// order (scene.glsl walks them without a stack).
+void BuildNode(std::vector<BvhNode>& nodes, std::vector<int>& order, int begin, int end,
                const std::vector<Primitive>& prims) {
+  const int index = static_cast<int>(nodes.size());
+  nodes.emplace_back();
   Box box, centroids;
   for (int i = begin; i < end; ++i) {
     Box b = Bounds(prims[order[i]]);
@@ -191,21 +195,18 @@ void BuildNode(std::vector<BvhNode>& nodes, int index, std::vector<int>& order, 
   if (end - begin <= 2) {
     nodes[index].first = begin;
     nodes[index].count = end - begin;
-    return;
+  } else {
+    glm::dvec3 ext = centroids.hi - centroids.lo;
+    int axis = ext.x > ext.y ? (ext.x > ext.z ? 0 : 2) : (ext.y > ext.z ? 1 : 2);
+    int mid = (begin + end) / 2;
+    std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end, [&](int a, int b) {
+      Box ba = Bounds(prims[a]), bb = Bounds(prims[b]);
+      return ba.lo[axis] + ba.hi[axis] < bb.lo[axis] + bb.hi[axis];
+    });
+    BuildNode(nodes, order, begin, mid, prims);
+    BuildNode(nodes, order, mid, end, prims);
   }
-  glm::dvec3 ext = centroids.hi - centroids.lo;
-  int axis = ext.x > ext.y ? (ext.x > ext.z ? 0 : 2) : (ext.y > ext.z ? 1 : 2);
-  int mid = (begin + end) / 2;
-  std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end, [&](int a, int b) {
-    Box ba = Bounds(prims[a]), bb = Bounds(prims[b]);
-    return ba.lo[axis] + ba.hi[axis] < bb.lo[axis] + bb.hi[axis];
-  });
-  int left = static_cast<int>(nodes.size());
-  nodes.resize(nodes.size() + 2);
-  nodes[index].first = left;
-  nodes[index].count = 0;
-  BuildNode(nodes, left, order, begin, mid, prims);
-  BuildNode(nodes, left + 1, order, mid, end, prims);
+  nodes[index].skip = static_cast<int>(nodes.size());
 }
 
 glm::vec4 PrimWord0(const Primitive& p) {
@@ -402,16 +403,14 @@ std::vector<glm::vec4> PackScene(const Scene& scene) {
   std::vector<int> order(bounded.size());
   std::iota(order.begin(), order.end(), 0);
   std::vector<BvhNode> nodes;
-  if (!bounded.empty()) {
-    nodes.resize(1);
-    BuildNode(nodes, 0, order, 0, static_cast<int>(bounded.size()), bounded);
-  }
+  if (!bounded.empty()) BuildNode(nodes, order, 0, static_cast<int>(bounded.size()), bounded);
   const int first_prim_word = 1 + 2 * static_cast<int>(nodes.size());
   std::vector<glm::vec4> words;
   words.push_back({float(bounded.size()), float(nodes.size()), float(first_prim_word), float(unbounded.size())});
   for (const BvhNode& n : nodes) {
-    words.push_back({float(n.box.lo.x), float(n.box.lo.y), float(n.box.lo.z), float(n.first)});
-    words.push_back({float(n.box.hi.x), float(n.box.hi.y), float(n.box.hi.z), float(n.count)});
+    words.push_back({float(n.box.lo.x), float(n.box.lo.y), float(n.box.lo.z), float(n.skip)});
+    words.push_back({float(n.box.hi.x), float(n.box.hi.y), float(n.box.hi.z),
+                     float(n.count > 0 ? 8 * n.first + n.count : 0)});
   }
   auto push = [&words](const Primitive& p) {
     words.push_back(PrimWord0(p));

@@ -5,7 +5,10 @@
 // The scene is a flat array of vec4 words (renderer/scene/scene.cpp packs it;
 // floats hold small integers exactly):
 //   word 0                       (bvhPrimCount, nodeCount, firstPrimWord, unboundedPrimCount)
-//   node i, words 1 + 2i, 2 + 2i (bbmin, leftChild or firstPrim), (bbmax, primCount; 0 = interior)
+//   node i, words 1 + 2i, 2 + 2i (bbmin, skip), (bbmax, 8 firstPrim + primCount; 0 = interior)
+//     nodes in depth-first order: an interior node's first child is the next
+//     node, `skip` is the node after its subtree (a stackless walk: no local
+//     arrays, which SIMD CPU drivers such as lavapipe handle slowly)
 //   prim j, words firstPrimWord + 3j ..
 //                                (type, radius or height, bumpSlope, bumpFrequency), (a, 0), (b, 0)
 // Unbounded primitives (planes) follow the BVH's primitives and are always tested.
@@ -20,7 +23,6 @@ const int PRIM_CAPSULE = 1;
 const int PRIM_PLANE = 2;
 const real RAY_TMIN = real(1e-4);
 const real RAY_TMAX = real(1e30);
-const int BVH_STACK = 32;
 
 // ---- camera -----------------------------------------------------------------
 
@@ -196,28 +198,30 @@ Hit traceScene(vec3 o, vec3 d) {
   }
   if (nodes == 0) return hit;
   vec3 invD = vec3(safeInverse(d.x), safeInverse(d.y), safeInverse(d.z));
-  int stack[BVH_STACK];
-  int sp = 0;
-  stack[sp++] = 0;
-  while (sp > 0) {
-    int node = stack[--sp];
+  int node = 0;
+  while (node < nodes) {
     vec4 n0 = sceneWord(1 + 2 * node);
     vec4 n1 = sceneWord(2 + 2 * node);
-    if (intersectBox(o, invD, vec3(n0.x, n0.y, n0.z), vec3(n1.x, n1.y, n1.z), hit.t) == RAY_TMAX) continue;
-    int count = int(n1.w);
-    int first = int(n0.w);
-    if (count > 0) {
-      for (int i = first; i < first + count; i++) {
-        real t = intersectPrim(loadPrim(i), o, d);
-        if (t > real(0) && t < hit.t) {
-          hit.t = t;
-          hit.prim = i;
-        }
-      }
-    } else if (sp + 2 <= BVH_STACK) {
-      stack[sp++] = first + 1;
-      stack[sp++] = first;
+    int skip = int(n0.w);
+    if (intersectBox(o, invD, vec3(n0.x, n0.y, n0.z), vec3(n1.x, n1.y, n1.z), hit.t) == RAY_TMAX) {
+      node = skip;
+      continue;
     }
+    int packed = int(n1.w);
+    if (packed == 0) {
+      node = node + 1;
+      continue;
+    }
+    int first = packed / 8;
+    int count = packed - 8 * first;
+    for (int i = first; i < first + count; i++) {
+      real t = intersectPrim(loadPrim(i), o, d);
+      if (t > real(0) && t < hit.t) {
+        hit.t = t;
+        hit.prim = i;
+      }
+    }
+    node = skip;
   }
   return hit;
 }

@@ -1,0 +1,122 @@
+// Renderer cost at 512x512 on whatever Vulkan device is picked (lavapipe on
+// the project machine): GPU milliseconds per frame from timestamps for `none`
+// and every filter variant, shaded samples per second for the 16x16
+// reference, and where the rest of the time goes (shader compile, pipeline
+// creation and first-dispatch JIT, read-back, EXR write).
+//   XDG_RUNTIME_DIR=/tmp build/bench/renderer_bench [--benchmark_filter=...]
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include "renderer.h"
+#include "scene.h"
+#include "shading.h"
+
+namespace {
+
+using namespace shimmer;
+
+constexpr int kSize = 512;
+
+render::RenderSettings Settings(const std::string& variant) {
+  render::RenderSettings s;
+  s.scene = scene::LoadScene("sphere-field").value;
+  s.material = s.scene.material;
+  s.variant = variant;
+  s.width = kSize;
+  s.height = kSize;
+  s.derivatives = shading::DerivativeSource::kQuadFine;
+  return s;
+}
+
+// Frame time from GPU timestamps; the first dispatch (JIT) happened in Create.
+void BM_Frame(benchmark::State& state, std::string variant, shading::DerivativeSource d) {
+  render::RenderSettings s = Settings(variant);
+  s.derivatives = d;
+  auto [r, error] = render::Renderer::Create(s);
+  if (!r) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  int frame = 0;
+  double readback = 0;
+  for (auto _ : state) {
+    auto res = r->RenderFrame(frame++);
+    if (!res.error.empty()) {
+      state.SkipWithError(res.error.c_str());
+      return;
+    }
+    state.SetIterationTime(res.frame.gpu_ms * 1e-3);
+    readback += res.frame.readback_ms;
+  }
+  state.counters["readback_ms"] = readback / frame;
+  state.counters["compile_ms"] = r->timings().compile_ms;
+  state.counters["pipeline_ms"] = r->timings().pipeline_ms;
+  state.counters["jit_ms"] = r->timings().jit_ms;
+}
+
+void BM_Reference(benchmark::State& state) {
+  render::RenderSettings s = Settings("none");
+  s.reference_spp = static_cast<int>(state.range(0));
+  auto [r, error] = render::Renderer::Create(s);
+  if (!r) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  int frame = 0;
+  double samples = 0, seconds = 0;
+  for (auto _ : state) {
+    auto res = r->RenderFrame(frame++);
+    if (!res.error.empty()) {
+      state.SkipWithError(res.error.c_str());
+      return;
+    }
+    state.SetIterationTime(res.frame.gpu_ms * 1e-3);
+    samples += double(kSize) * kSize * s.reference_spp * s.reference_spp;
+    seconds += res.frame.gpu_ms * 1e-3;
+  }
+  state.counters["Msamples_per_s"] = samples / seconds * 1e-6;
+}
+
+void BM_ExrWrite(benchmark::State& state) {
+  auto [r, error] = render::Renderer::Create(Settings("none"));
+  if (!r) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  render::Frame f = r->RenderFrame(0).frame;
+  auto path = (std::filesystem::temp_directory_path() / "shimmer_bench_frame.exr").string();
+  for (auto _ : state) {
+    std::string e = render::WriteExr(path, f, false);
+    if (!e.empty()) state.SkipWithError(e.c_str());
+  }
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using shimmer::shading::DerivativeSource;
+  benchmark::RegisterBenchmark("frame/none/quad", BM_Frame, std::string("none"), DerivativeSource::kQuadFine)
+      ->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(8);
+  benchmark::RegisterBenchmark("frame/none/analytic", BM_Frame, std::string("none"), DerivativeSource::kAnalytic)
+      ->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(8);
+  for (const auto& v : shimmer::shading::Variants()) {
+    if (v.name == "none") continue;
+    for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
+      benchmark::RegisterBenchmark(("frame/" + std::string(v.name) + (d == DerivativeSource::kAnalytic ? "/analytic" : "/quad")).c_str(),
+                                   BM_Frame, std::string(v.name), d)
+          ->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(8);
+  }
+  benchmark::RegisterBenchmark("frame/supersample-2/quad", BM_Frame, std::string("supersample-2"),
+                               DerivativeSource::kQuadFine)
+      ->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(4);
+  benchmark::RegisterBenchmark("reference", BM_Reference)->Arg(16)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(3);
+  benchmark::RegisterBenchmark("exr_write_512", BM_ExrWrite)->Unit(benchmark::kMillisecond)->Iterations(5);
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -18,6 +18,7 @@ void AddVariantsCommand(CLI::App& app);
 void AddNdfCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddMergeCommand(CLI::App& app);
+void AddSweepCommand(CLI::App& app);
 void AddRenderCommand(CLI::App& app);
 
 }  // namespace shimmer::cli

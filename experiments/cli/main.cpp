@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   shimmer::cli::AddRenderCommand(app);
   shimmer::cli::AddRunCommand(app);
   shimmer::cli::AddMergeCommand(app);
+  shimmer::cli::AddSweepCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

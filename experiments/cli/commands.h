@@ -16,5 +16,6 @@ struct UsageError : std::runtime_error {
 
 void AddVariantsCommand(CLI::App& app);
 void AddNdfCommand(CLI::App& app);
+void AddMetricsCommand(CLI::App& app);
 
 }  // namespace shimmer::cli

@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   app.fallthrough(false);
   shimmer::cli::AddVariantsCommand(app);
   shimmer::cli::AddNdfCommand(app);
+  shimmer::cli::AddMetricsCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -237,7 +237,7 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
     if (with_motion && t > 0)
       warp.AddFrame(previous.test.luminance, T, current->test.motion, region, excluded);
     if (observer) {
-      Status s = observer(t, T, has_ref ? Rf : (t > 0 ? previous.test.luminance : T));
+      Status s = observer(ObservedFrame{t, test->fps, has_ref, T, has_ref ? Rf : (t > 0 ? previous.test.luminance : T)});
       if (!s) return R::Failure(s.error());
     }
     previous = std::move(*current);
@@ -245,7 +245,7 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
 
   // Pixels with any non-finite sample leave the region for every per-pixel
   // metric, so that all of them describe the same set of pixels.
-  cv::Mat good = region & (excluded == 0);
+  cv::Mat good = (region != 0) & (excluded == 0);
   good /= 255;
   const long long used = cv::countNonZero(good);
   report.nan_pixels = region_pixels - used;

@@ -16,9 +16,10 @@ struct UsageError : std::runtime_error {
 
 void AddVariantsCommand(CLI::App& app);
 void AddNdfCommand(CLI::App& app);
+void AddRenderCommand(CLI::App& app);
+void AddMetricsCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddMergeCommand(CLI::App& app);
 void AddSweepCommand(CLI::App& app);
-void AddRenderCommand(CLI::App& app);
 
 }  // namespace shimmer::cli

@@ -237,7 +237,7 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
     if (with_motion && t > 0)
       warp.AddFrame(previous.test.luminance, T, current->test.motion, region, excluded);
     if (observer) {
-      Status s = observer(t, T, has_ref ? Rf : (t > 0 ? previous.test.luminance : T));
+      Status s = observer(ObservedFrame{t, test->fps, has_ref, T, has_ref ? Rf : (t > 0 ? previous.test.luminance : T)});
       if (!s) return R::Failure(s.error());
     }
     previous = std::move(*current);

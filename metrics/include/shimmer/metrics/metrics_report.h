@@ -32,9 +32,15 @@ struct MetricsOptions {
   int segment_length = 0;               // 0: min(N, 64)
 };
 
-// Called once per frame, in order, with the frames as read (luminance).
-// `other` is R_t with a reference, else T_{t-1} (T_0 for t = 0).
-using FrameObserver = std::function<Status(int t, const cv::Mat& test, const cv::Mat& other)>;
+// What an observer sees of each frame, in order, as read (luminance).
+struct ObservedFrame {
+  int index = 0;
+  double fps = 0;
+  bool has_reference = false;
+  const cv::Mat& test;
+  const cv::Mat& other;  // R_t with a reference, else T_{t-1} (T_0 for t = 0)
+};
+using FrameObserver = std::function<Status(const ObservedFrame&)>;
 
 struct FlickerResult {
   std::string signal;  // "error" or "test"

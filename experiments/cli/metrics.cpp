@@ -1,0 +1,143 @@
+// `shimmer metrics TEST [REF]`: the temporal metrics of DESIGN.md on any EXR
+// sequence, from shimmer's renderer or from anyone else's.
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+
+#include "commands.h"
+#include "shimmer/metrics/metrics_report.h"
+#include "shimmer/metrics/report_files.h"
+#include "shimmer/metrics/side_by_side_video.h"
+
+namespace shimmer::cli {
+
+namespace {
+
+namespace m = shimmer::metrics;
+
+struct MetricsCliOptions {
+  std::string test, reference;
+  double fps = 0;
+  std::string layer, mask, signal, out, video;
+  bool highlight_mask = false;
+  double highlight_threshold = m::HighlightMaskOptions{}.threshold;
+  int highlight_dilate = m::HighlightMaskOptions{}.dilate_radius;
+  int segment = 0;
+  bool json = false;
+};
+
+void Warn(const std::string& text) { std::fprintf(stderr, "shimmer: warning: %s\n", text.c_str()); }
+
+void PrintOptional(const char* name, const std::optional<double>& v) {
+  if (v)
+    std::printf("%-18s %.6g\n", name, *v);
+  else
+    std::printf("%-18s undefined\n", name);
+}
+
+void PrintText(const m::MetricsReport& r) {
+  std::printf("%d frames %dx%d at %g fps (%s), layer %s, region %s: %lld px", r.frames, r.width, r.height, r.fps,
+              r.fps_source.c_str(), r.layer.c_str(), r.region.c_str(), r.pixels);
+  if (r.nan_pixels) std::printf(" (%lld excluded: NaN/Inf)", r.nan_pixels);
+  std::printf("\n");
+  std::printf("%-18s %.6g\n", "tv_test", r.tv_test);
+  if (!r.reference.empty()) {
+    PrintOptional("tv_ref", r.tv_ref);
+    PrintOptional("tv_err", r.tv_err);
+    PrintOptional("tv_ratio", r.tv_ratio);
+    PrintOptional("energy_bias", r.energy_bias);
+    PrintOptional("temporal_diff_err", r.temporal_diff_err);
+    PrintOptional("rmse", r.rmse);
+    PrintOptional("relmse", r.relmse);
+  }
+  std::printf("%-18s %.6g\n", "temporal_diff_test", r.temporal_diff_test);
+  if (r.warp_err) std::printf("%-18s %.6g\n", "warp_err", *r.warp_err);
+  const m::FlickerResult& f = r.flicker;
+  std::printf("flicker of %s (Welch, L = %d, %d segments): 0-2 Hz %.4g | 2-8 Hz %.4g | 8-%g Hz %.4g\n",
+              f.signal.c_str(), f.segment_length, f.segments, f.band_low, f.band_mid, r.fps / 2, f.band_high);
+  std::printf("%-18s %.6g\n", "flicker_index", f.flicker_index);
+}
+
+void Run(const MetricsCliOptions& o) {
+  m::MetricsOptions options;
+  options.test = o.test;
+  if (!o.reference.empty()) options.reference = o.reference;
+  if (o.fps != 0) {
+    if (!(o.fps > 0)) throw UsageError("--fps must be > 0, got " + std::to_string(o.fps));
+    options.request.fps = o.fps;
+  }
+  options.request.layer = o.layer;
+  if (!o.mask.empty()) options.mask_file = o.mask;
+  options.highlight_mask = o.highlight_mask;
+  if (!(o.highlight_threshold >= 0)) throw UsageError("--highlight-threshold must be >= 0");
+  if (o.highlight_dilate < 0) throw UsageError("--highlight-dilate must be >= 0");
+  options.highlight = {o.highlight_threshold, o.highlight_dilate};
+  if (o.signal == "error")
+    options.signal = m::FlickerSignal::kError;
+  else if (o.signal == "test")
+    options.signal = m::FlickerSignal::kTest;
+  else if (!o.signal.empty())
+    throw UsageError("--signal must be error or test, got '" + o.signal + "'");
+  if (o.segment < 0) throw UsageError("--segment must be >= 2");
+  options.segment_length = o.segment;
+
+  std::unique_ptr<m::SideBySideVideo> video;
+  m::FrameObserver observer;
+  if (!o.video.empty()) {
+    observer = [&](const m::ObservedFrame& frame) -> m::Status {
+      if (!video) {
+        auto opened = m::SideBySideVideo::Open(o.video, frame.test.cols, frame.test.rows, frame.fps,
+                                               frame.has_reference);
+        if (!opened) return m::Status::Failure(opened.error());
+        video = std::move(*opened);
+      }
+      return video->AddFrame(frame.test, frame.other);
+    };
+  }
+
+  auto report = m::ComputeMetrics(options, observer);
+  if (!report) throw UsageError(report.error());
+  std::vector<std::string> warnings = report->warnings;
+  if (video)
+    if (m::Status s = video->Finish(); !s) throw UsageError(s.error());
+  if (!o.out.empty())
+    if (m::Status s = m::WriteReportFiles(*report, o.out, &warnings); !s) throw UsageError(s.error());
+  for (size_t i = report->warnings.size(); i < warnings.size(); ++i) report->warnings.push_back(warnings[i]);
+  for (const std::string& w : report->warnings) Warn(w);
+  if (o.json)
+    std::cout << m::ToJson(*report).dump() << "\n";
+  else
+    PrintText(*report);
+}
+
+}  // namespace
+
+void AddMetricsCommand(CLI::App& app) {
+  auto o = std::make_shared<MetricsCliOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "metrics", "Temporal metrics of an EXR sequence (any renderer): variance, energy bias, flicker spectrum");
+  cmd->add_option("TEST", o->test, "Test sequence: directory of EXR frames (sorted by name) or sequence.json")
+      ->required();
+  cmd->add_option("REF", o->reference, "Reference sequence, same size and length (optional)");
+  cmd->add_option("--fps", o->fps, "Frame rate when sequence.json gives none (default 60)");
+  cmd->add_option("--layer", o->layer, "EXR layer to measure (default: specular when present, else beauty R,G,B)");
+  auto* mask = cmd->add_option("--mask", o->mask, "Region: any image, nonzero pixels are in");
+  auto* highlight = cmd->add_flag("--highlight-mask", o->highlight_mask,
+                                  "Region: reference specular luminance above the threshold, dilated, union over "
+                                  "frames");
+  mask->excludes(highlight);
+  highlight->excludes(mask);
+  cmd->add_option("--highlight-threshold", o->highlight_threshold, "Highlight mask threshold on linear Y")
+      ->capture_default_str();
+  cmd->add_option("--highlight-dilate", o->highlight_dilate, "Highlight mask dilation radius (pixels)")
+      ->capture_default_str();
+  cmd->add_option("--signal", o->signal, "Spectrum of: error (T - R, default with REF) or test");
+  cmd->add_option("--segment", o->segment, "Welch segment length L (default min(frames, 64))");
+  cmd->add_option("--out", o->out, "Directory for maps (EXR + PNG heatmaps), spectrum CSV/plot, metrics.json");
+  cmd->add_option("--video", o->video, "Write an MP4: test | reference | error heatmap");
+  cmd->add_flag("--json", o->json, "Print one JSON object on stdout");
+  cmd->callback([o] { Run(*o); });
+}
+
+}  // namespace shimmer::cli

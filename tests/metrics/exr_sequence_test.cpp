@@ -1,0 +1,251 @@
+#include <gtest/gtest.h>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfMultiPartOutputFile.h>
+#include <ImfOutputPart.h>
+#include <ImfPartType.h>
+
+#include <fstream>
+
+#include "shimmer/metrics/exr_sequence.h"
+#include "test_sequences.h"
+
+namespace shimmer::metrics {
+namespace {
+
+using testing::Layout;
+using testing::SequenceSpec;
+using testing::TempDir;
+using testing::WriteSequence;
+
+SequenceSpec Ramp(Layout layout, int frames = 3) {
+  SequenceSpec s;
+  s.frames = frames;
+  s.width = 8;
+  s.height = 6;
+  s.layout = layout;
+  s.value = [](int t, int x, int y) { return 0.25f * t + 0.125f * x + 0.5f * y; };
+  return s;
+}
+
+bool Contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+TEST(ExrSequence, ReadsPlainRgbInNameOrder) {
+  TempDir dir;
+  WriteSequence(dir.path(), Ramp(Layout::kBeautyRgb, 12));
+  auto seq = OpenSequence(dir.path(), {});
+  ASSERT_TRUE(seq) << seq.error();
+  EXPECT_EQ(seq->frames.size(), 12u);
+  EXPECT_EQ(seq->width, 8);
+  EXPECT_EQ(seq->height, 6);
+  EXPECT_EQ(seq->layer, "beauty");
+  EXPECT_EQ(seq->fps, 60);
+  EXPECT_EQ(seq->fps_source, "default");
+  EXPECT_FALSE(seq->has_motion);
+  for (size_t i = 1; i < seq->frames.size(); ++i)
+    EXPECT_LT(seq->frames[i - 1].filename().string(), seq->frames[i].filename().string());
+  auto frame = ReadFrame(seq->frames[11], seq->layer, 8, 6, false);
+  ASSERT_TRUE(frame) << frame.error();
+  EXPECT_FLOAT_EQ(frame->luminance.at<float>(5, 7), 0.25f * 11 + 0.125f * 7 + 0.5f * 5);
+}
+
+TEST(ExrSequence, LuminanceUsesRec709Weights) {
+  TempDir dir;
+  cv::Mat r(2, 2, CV_32F, cv::Scalar(1.0)), g(2, 2, CV_32F, cv::Scalar(2.0)), b(2, 2, CV_32F, cv::Scalar(4.0));
+  ASSERT_TRUE(WriteExr(dir / "a.exr", {{"R", r}, {"G", g}, {"B", b}}));
+  auto frame = ReadFrame(dir / "a.exr", "beauty", 2, 2, false);
+  ASSERT_TRUE(frame) << frame.error();
+  EXPECT_FLOAT_EQ(frame->luminance.at<float>(1, 1), static_cast<float>(0.2126 + 2 * 0.7152 + 4 * 0.0722));
+}
+
+TEST(ExrSequence, ReadsHalfRgba) {
+  TempDir dir;
+  WriteSequence(dir.path(), Ramp(Layout::kBeautyRgbHalf));
+  auto seq = OpenSequence(dir.path(), {});
+  ASSERT_TRUE(seq) << seq.error();
+  auto frame = ReadFrame(seq->frames[2], seq->layer, 8, 6, false);
+  ASSERT_TRUE(frame) << frame.error();
+  EXPECT_FLOAT_EQ(frame->luminance.at<float>(3, 4), 0.5f + 0.5f + 1.5f);  // exact in half
+}
+
+TEST(ExrSequence, PrefersSpecularLayerAndHonoursLayerOption) {
+  TempDir dir;
+  WriteSequence(dir.path(), Ramp(Layout::kSpecularLayer));
+  auto seq = OpenSequence(dir.path(), {});
+  ASSERT_TRUE(seq) << seq.error();
+  EXPECT_EQ(seq->layer, "specular");
+  auto spec = ReadFrame(seq->frames[1], "specular", 8, 6, false);
+  ASSERT_TRUE(spec) << spec.error();
+  EXPECT_FLOAT_EQ(spec->luminance.at<float>(0, 1), 0.25f + 0.125f);
+  auto beauty = OpenSequence(dir.path(), {.layer = "beauty"});
+  ASSERT_TRUE(beauty) << beauty.error();
+  auto b = ReadFrame(beauty->frames[1], "beauty", 8, 6, false);
+  EXPECT_FLOAT_EQ(b->luminance.at<float>(0, 1), 0.5f);
+}
+
+TEST(ExrSequence, ReadsMultiPartFilesWithOneLayerPerPart) {
+  TempDir dir;
+  const int w = 4, h = 3;
+  std::vector<float> beauty(w * h, 0.5f), spec(w * h);
+  for (int i = 0; i < w * h; ++i) spec[i] = 0.1f * i;
+  std::vector<Imf::Header> headers(2, Imf::Header(w, h));
+  headers[0].setName("rgba");
+  headers[1].setName("specular");
+  for (auto& hd : headers) {
+    hd.setType(Imf::SCANLINEIMAGE);
+    for (const char* c : {"R", "G", "B"}) hd.channels().insert(c, Imf::Channel(Imf::FLOAT));
+  }
+  {
+    Imf::MultiPartOutputFile out((dir / "f0.exr").c_str(), headers.data(), 2);
+    for (int p = 0; p < 2; ++p) {
+      Imf::OutputPart part(out, p);
+      Imf::FrameBuffer fb;
+      float* data = p == 0 ? beauty.data() : spec.data();
+      for (const char* c : {"R", "G", "B"})
+        fb.insert(c, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(data), sizeof(float), w * sizeof(float)));
+      part.setFrameBuffer(fb);
+      part.writePixels(h);
+    }
+  }
+  std::filesystem::copy_file(dir / "f0.exr", dir / "f1.exr");
+  auto seq = OpenSequence(dir.path(), {});
+  ASSERT_TRUE(seq) << seq.error();
+  EXPECT_EQ(seq->layer, "specular");
+  auto frame = ReadFrame(seq->frames[0], "specular", w, h, false);
+  ASSERT_TRUE(frame) << frame.error();
+  EXPECT_FLOAT_EQ(frame->luminance.at<float>(2, 3), 0.1f * 11);
+  auto b = ReadFrame(seq->frames[0], "beauty", w, h, false);
+  ASSERT_TRUE(b) << b.error();
+  EXPECT_FLOAT_EQ(b->luminance.at<float>(0, 0), 0.5f);
+}
+
+TEST(ExrSequence, ReadsMotionVectors) {
+  TempDir dir;
+  SequenceSpec s = Ramp(Layout::kBeautyRgb);
+  s.motion = [](int t, int x, int) { return cv::Vec2f(-1.0f * t, 0.5f * x); };
+  WriteSequence(dir.path(), s);
+  auto seq = OpenSequence(dir.path(), {});
+  ASSERT_TRUE(seq) << seq.error();
+  EXPECT_TRUE(seq->has_motion);
+  auto frame = ReadFrame(seq->frames[2], seq->layer, 8, 6, true);
+  ASSERT_TRUE(frame) << frame.error();
+  EXPECT_EQ(frame->motion.at<cv::Vec2f>(1, 3), cv::Vec2f(-2.0f, 1.5f));
+}
+
+TEST(ExrSequence, SequenceJsonGivesFpsAndFrameList) {
+  TempDir dir;
+  WriteSequence(dir.path(), Ramp(Layout::kBeautyRgb, 4));
+  std::ofstream(dir / "sequence.json") << R"({"fps": 24, "frames": ["frame_0002.exr", "frame_0000.exr"]})";
+  auto seq = OpenSequence(dir / "sequence.json", {.fps = 30.0});
+  ASSERT_TRUE(seq) << seq.error();
+  EXPECT_EQ(seq->fps, 24);
+  EXPECT_EQ(seq->fps_source, "sequence.json");
+  ASSERT_EQ(seq->frames.size(), 2u);
+  EXPECT_EQ(seq->frames[0].filename(), "frame_0002.exr");
+  EXPECT_EQ(seq->warnings.size(), 1u);  // --fps disagreed
+  // The directory form reads the same sidecar for its fps.
+  auto by_dir = OpenSequence(dir.path(), {});
+  ASSERT_TRUE(by_dir) << by_dir.error();
+  EXPECT_EQ(by_dir->fps, 24);
+  EXPECT_EQ(by_dir->frames.size(), 4u);
+}
+
+TEST(ExrSequence, FpsOptionWhenNoSidecar) {
+  TempDir dir;
+  WriteSequence(dir.path(), Ramp(Layout::kBeautyRgb, 2));
+  auto seq = OpenSequence(dir.path(), {.fps = 90.0});
+  ASSERT_TRUE(seq);
+  EXPECT_EQ(seq->fps, 90);
+  EXPECT_EQ(seq->fps_source, "--fps");
+}
+
+TEST(ExrSequenceErrors, EmptyDirectory) {
+  TempDir dir;
+  auto seq = OpenSequence(dir.path(), {});
+  ASSERT_FALSE(seq);
+  EXPECT_TRUE(Contains(seq.error(), dir.path().string()));
+  EXPECT_TRUE(Contains(seq.error(), "no .exr frames"));
+}
+
+TEST(ExrSequenceErrors, MissingPath) {
+  auto seq = OpenSequence("/nonexistent/shimmer/frames", {});
+  ASSERT_FALSE(seq);
+  EXPECT_TRUE(Contains(seq.error(), "no such file or directory"));
+}
+
+TEST(ExrSequenceErrors, DifferentFrameSizesNameTheFrame) {
+  TempDir dir;
+  WriteSequence(dir.path(), Ramp(Layout::kBeautyRgb, 3));
+  SequenceSpec other = Ramp(Layout::kBeautyRgb, 1);
+  other.width = 9;
+  other.prefix = "frame_0001b";
+  WriteSequence(dir.path(), other);
+  auto seq = OpenSequence(dir.path(), {});
+  ASSERT_FALSE(seq);
+  EXPECT_TRUE(Contains(seq.error(), "frame_0001b0000.exr")) << seq.error();
+  EXPECT_TRUE(Contains(seq.error(), "9x6")) << seq.error();
+}
+
+TEST(ExrSequenceErrors, MissingLayerNamesFileAndLayers) {
+  TempDir dir;
+  WriteSequence(dir.path(), Ramp(Layout::kBeautyRgb, 2));
+  auto seq = OpenSequence(dir.path(), {.layer = "specular"});
+  ASSERT_FALSE(seq);
+  EXPECT_TRUE(Contains(seq.error(), "frame_0000.exr")) << seq.error();
+  EXPECT_TRUE(Contains(seq.error(), "no layer 'specular'")) << seq.error();
+  EXPECT_TRUE(Contains(seq.error(), "beauty")) << seq.error();
+}
+
+TEST(ExrSequenceErrors, MissingChannelInALaterFrame) {
+  TempDir dir;
+  WriteSequence(dir.path(), Ramp(Layout::kSpecularLayer, 2));
+  cv::Mat v(6, 8, CV_32F, cv::Scalar(1));
+  ASSERT_TRUE(WriteExr(dir / "frame_0002.exr", {{"R", v}, {"G", v}, {"B", v}, {"specular.R", v}, {"specular.B", v}}));
+  auto seq = OpenSequence(dir.path(), {});
+  ASSERT_FALSE(seq);
+  EXPECT_TRUE(Contains(seq.error(), "frame_0002.exr")) << seq.error();
+  EXPECT_TRUE(Contains(seq.error(), "lacks channel")) << seq.error();
+}
+
+TEST(ExrSequenceErrors, NonExrFile) {
+  TempDir dir;
+  WriteSequence(dir.path(), Ramp(Layout::kBeautyRgb, 2));
+  std::ofstream(dir / "frame_0002.exr") << "this is not an EXR file";
+  auto seq = OpenSequence(dir.path(), {});
+  ASSERT_FALSE(seq);
+  EXPECT_TRUE(Contains(seq.error(), "frame_0002.exr")) << seq.error();
+  EXPECT_TRUE(Contains(seq.error(), "not a readable EXR")) << seq.error();
+}
+
+TEST(ExrSequenceErrors, TruncatedFileFailsOnRead) {
+  TempDir dir;
+  SequenceSpec s = Ramp(Layout::kBeautyRgb, 1);
+  s.width = 64, s.height = 64;
+  WriteSequence(dir.path(), s);
+  const auto file = dir / "frame_0000.exr";
+  std::filesystem::resize_file(file, std::filesystem::file_size(file) * 2 / 3);
+  auto seq = OpenSequence(dir.path(), {});  // the header alone is intact
+  Result<Frame> frame = seq ? ReadFrame(file, "beauty", 64, 64, false) : Result<Frame>::Failure(seq.error());
+  ASSERT_FALSE(frame);
+  EXPECT_TRUE(Contains(frame.error(), "frame_0000.exr")) << frame.error();
+}
+
+TEST(ReadMask, AnyImageNonzeroIsIn) {
+  TempDir dir;
+  cv::Mat m = cv::Mat::zeros(6, 8, CV_32F);
+  m.at<float>(2, 3) = 0.5f;
+  m.at<float>(4, 1) = std::numeric_limits<float>::quiet_NaN();
+  ASSERT_TRUE(WriteExr(dir / "m.exr", {{"Y", m}}));
+  auto mask = ReadMask(dir / "m.exr", 8, 6);
+  ASSERT_TRUE(mask) << mask.error();
+  EXPECT_EQ(cv::countNonZero(*mask), 1);
+  EXPECT_EQ(mask->at<uint8_t>(2, 3), 1);
+  auto wrong = ReadMask(dir / "m.exr", 9, 6);
+  ASSERT_FALSE(wrong);
+  EXPECT_TRUE(Contains(wrong.error(), "8x6")) << wrong.error();
+}
+
+}  // namespace
+}  // namespace shimmer::metrics

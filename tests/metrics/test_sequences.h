@@ -1,0 +1,50 @@
+// Synthetic EXR sequences for the metrics tests: written into a temporary
+// directory that the test owns and removes.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+namespace shimmer::metrics::testing {
+
+// A fresh directory under the system temp dir, removed with everything in it.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// Value of pixel (x, y) at frame t.
+using PixelFunction = std::function<float(int t, int x, int y)>;
+
+enum class Layout {
+  kBeautyRgb,      // R,G,B float
+  kBeautyRgbHalf,  // R,G,B,A half
+  kSpecularLayer,  // R,G,B beauty (constant 0.5) + specular.R/G/B carrying the value
+  kLuminanceY,     // a single Y channel
+};
+
+struct SequenceSpec {
+  int frames = 8, width = 32, height = 32;
+  Layout layout = Layout::kBeautyRgb;
+  PixelFunction value;
+  // Optional motion vectors (pixels towards the previous frame).
+  std::function<cv::Vec2f(int t, int x, int y)> motion;
+  std::string prefix = "frame_";
+};
+
+// Writes frames <prefix>0000.exr ... into `dir` (created). Grey pixels: R = G = B =
+// value, so luminance == value exactly (the weights sum to 1).
+void WriteSequence(const std::filesystem::path& dir, const SequenceSpec& spec);
+
+}  // namespace shimmer::metrics::testing

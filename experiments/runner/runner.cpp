@@ -94,6 +94,7 @@ Measured MeasureJob(const Job& job, const RunOptions& options) {
   mo.test = job_dir;
   mo.reference = ref_dir;
   mo.highlight_mask = job.metrics.highlight_mask;
+  mo.highlight.threshold = job.metrics.highlight_threshold;
   mo.segment_length = job.metrics.segment;
   auto report = metrics::ComputeMetrics(mo);
   if (!report.ok()) {

@@ -13,7 +13,8 @@ json Job::ToJson() const {
           {"variant", variant}, {"params", params},         {"derivatives", derivatives},
           {"width", width},   {"height", height},           {"frames", frames},
           {"fps", fps},       {"reference_spp", reference.spp}, {"reference_tolerance", reference.tolerance},
-          {"highlight_mask", metrics.highlight_mask}, {"segment", metrics.segment}};
+          {"highlight_mask", metrics.highlight_mask}, {"highlight_threshold", metrics.highlight_threshold},
+          {"segment", metrics.segment}};
 }
 
 Job Job::FromJson(const json& j) {
@@ -31,6 +32,7 @@ Job Job::FromJson(const json& j) {
   job.reference.spp = j.at("reference_spp");
   job.reference.tolerance = j.at("reference_tolerance");
   job.metrics.highlight_mask = j.at("highlight_mask");
+  job.metrics.highlight_threshold = j.at("highlight_threshold");
   job.metrics.segment = j.at("segment");
   return job;
 }

@@ -186,10 +186,14 @@ Spec ParseSpecObject(const json& j) {
   if (j.contains("metrics")) {
     const json& m = j["metrics"];
     if (!m.is_object()) throw SpecError{"metrics", "must be an object"};
-    RejectUnknownKeys(m, {"highlight_mask", "segment"}, "metrics");
+    RejectUnknownKeys(m, {"highlight_mask", "highlight_threshold", "segment"}, "metrics");
     if (m.contains("highlight_mask")) {
       if (!m["highlight_mask"].is_boolean()) throw SpecError{"highlight_mask", "must be true or false"};
       s.metrics.highlight_mask = m["highlight_mask"];
+    }
+    if (m.contains("highlight_threshold")) {
+      s.metrics.highlight_threshold = Number(m["highlight_threshold"], "highlight_threshold");
+      if (s.metrics.highlight_threshold <= 0) throw SpecError{"highlight_threshold", "must be > 0"};
     }
     if (m.contains("segment")) s.metrics.segment = PositiveInt(m["segment"], "segment");
   }

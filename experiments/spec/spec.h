@@ -23,6 +23,11 @@ struct ReferenceQuality {
 
 struct MetricOptions {
   bool highlight_mask = true;
+  // Reference specular luminance above which a pixel is a highlight. Lower
+  // than `shimmer metrics`' default of 1: shimmer's scenes light at a few
+  // units of irradiance, and a pixel-averaged highlight on a sub-pixel sphere
+  // stays well below 1.
+  double highlight_threshold = 0.1;
   int segment = 0;  // Welch segment length; 0: min(frames, 64)
 };
 

@@ -21,5 +21,6 @@ void AddMetricsCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddMergeCommand(CLI::App& app);
 void AddSweepCommand(CLI::App& app);
+void AddReportCommand(CLI::App& app);
 
 }  // namespace shimmer::cli

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   shimmer::cli::AddRunCommand(app);
   shimmer::cli::AddMergeCommand(app);
   shimmer::cli::AddSweepCommand(app);
+  shimmer::cli::AddReportCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 
 #include "job.h"
 #include "result_store.h"
@@ -19,7 +20,16 @@ struct TempDir {
 
 JobResult MakeResult(const std::string& variant, double fp_max, double tv_ratio) {
   JobResult r;
-  r.job = {"sphere", "ggx:0.02", "orbit", variant, {{"fp_max", fp_max}}, "quad", 32, 32, 8, 30, {4, 0}};
+  r.job.scene = "sphere";
+  r.job.material = "ggx:0.02";
+  r.job.camera = "orbit";
+  r.job.variant = variant;
+  r.job.params = {{"fp_max", fp_max}};
+  r.job.derivatives = "quad";
+  r.job.width = r.job.height = 32;
+  r.job.frames = 8;
+  r.job.fps = 30;
+  r.job.reference = {4, 0};
   r.id = JobId(r.job);
   r.reference_id = ReferenceId(r.job);
   r.metrics = {{"tv_ratio", tv_ratio}, {"tv_err", 0.5}, {"flicker", {{"flicker_index", 0.25}}}};
@@ -71,6 +81,48 @@ TEST(ResultStore, UnwritableLocationIsAClearError) {
   auto [store, error] = ResultStore::Open("/proc/shimmer-no/r.db");
   EXPECT_FALSE(store);
   EXPECT_NE(error.find("/proc/shimmer-no/r.db"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace shimmer::experiments
+
+#include "report.h"
+
+namespace shimmer::experiments {
+namespace {
+
+TEST(Report, ParetoFrontKeepsOnlyUndominatedPoints) {
+  // (cost, error): b dominates c; a is cheapest; d is most accurate; e ties a's cost but is worse.
+  const std::vector<double> cost{1, 2, 3, 5, 1};
+  const std::vector<double> error{10, 5, 6, 1, 11};
+  EXPECT_EQ(ParetoFront(cost, error), (std::vector<int>{0, 1, 3}));
+}
+
+TEST(Report, WritesTablesCsvAndPlotScripts) {
+  TempDir dir;
+  std::vector<JobResult> rows;
+  for (const char* v : {"none", "tk19", "supersample-2"}) {
+    JobResult r = MakeResult(v, 1.0, 2.0);
+    r.metrics["flicker"] = {{"flicker_index", 0.1}, {"freq_hz", {0.0, 7.5, 15.0}}, {"psd", {1e-3, 2e-3, 0.0}}};
+    rows.push_back(r);
+  }
+  std::vector<std::string> warnings;
+  ASSERT_EQ(WriteReport(rows, "t", (dir.path / "rep").string(), &warnings), "");
+  std::ifstream csv(dir.path / "rep" / "report.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header,
+            "scene,material,camera,variant,params,derivatives,tv_ratio,tv_err,energy_bias,temporal_diff_err,relmse,"
+            "flicker_index,ms_per_frame");
+  int lines = 0;
+  for (std::string l; std::getline(csv, l);) ++lines;
+  EXPECT_EQ(lines, 3);
+  std::ifstream md(dir.path / "rep" / "report.md");
+  std::string text((std::istreambuf_iterator<char>(md)), {});
+  EXPECT_NE(text.find("| tk19 fp_max=1 |"), std::string::npos) << text;
+  EXPECT_NE(text.find("## Summary"), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_pareto.gp"));
+  EXPECT_NE(WriteReport({}, "t", (dir.path / "empty").string(), &warnings), "");
 }
 
 }  // namespace

@@ -74,10 +74,13 @@ TEST(RunCli, KilledRunResumesWithoutRecomputingOrCorrupting) {
     waitpid(pid, &status, 0);
   }
   // Whatever was killed mid-write left no sequence under a final name.
-  if (fs::exists(ws.dir / "part"))
-  for (const auto& entry : fs::directory_iterator(ws.dir / "part"))
-    if (entry.path().extension() != ".partial")
-      EXPECT_TRUE(fs::exists(entry.path() / "sequence.json")) << entry.path();
+  if (fs::exists(ws.dir / "part")) {
+    for (const auto& entry : fs::directory_iterator(ws.dir / "part")) {
+      if (entry.path().extension() != ".partial") {
+        EXPECT_TRUE(fs::exists(entry.path() / "sequence.json")) << entry.path();
+      }
+    }
+  }
   const auto before = Rows(ws.dir / "part.db");
   std::printf("rows finished before the resume: %zu of %zu\n", before.size(), full.size());
   ASSERT_EQ(std::system(ws.Run("--db part.db --work part").c_str()), 0);

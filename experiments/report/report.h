@@ -1,0 +1,23 @@
+// Report tables and plots from a results store: report.md, report.csv, and
+// gnuplot scripts with their SVGs (speed against error with the Pareto front,
+// flicker spectra), written into one directory.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "result_store.h"
+
+namespace shimmer::experiments {
+
+// Indices of the rows on the Pareto front of (cost, error): no other row is
+// at most as costly and at most as wrong with one of them strictly better.
+std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<double>& error);
+
+// Writes the report for `rows` into `out_dir` (created). Returns an error
+// message, empty on success. Plots need gnuplot; without it the scripts and
+// data are still written and a warning names the scripts.
+std::string WriteReport(const std::vector<JobResult>& rows, const std::string& title, const std::string& out_dir,
+                        std::vector<std::string>* warnings);
+
+}  // namespace shimmer::experiments

@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
-# The main job: installs dependencies, builds shimmer and runs it.
-# For now: lists the filter variants and evaluates filtered NDFs.
+# The main job: installs dependencies, builds shimmer, runs the quick spec
+# (every filter variant on two scenes, about a minute on 2 cores with lavapipe)
+# and writes its report to results/quick/.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 bash "$root/scripts/install-deps.sh"
 bash "$root/scripts/build.sh" -DSHIMMER_BUILD_TESTS=OFF -DSHIMMER_BUILD_BENCH=OFF
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 shimmer="${SHIMMER_BUILD_DIR:-$root/build}/experiments/shimmer"
-"$shimmer" variants
-echo "--- a 0.01-roughness GGX lobe seen through a 0.05 x 0.02 slope-space footprint:"
-for v in none k16-ggx-rect k16-ggx-rect-stable k16-beckmann-rect tk19; do
-  "$shimmer" ndf --variant "$v" --ndf ggx --alpha 0.01 --slope 0.03 0.0 --footprint 0.05 0.02 --json
-done
+cd "$root"
+"$shimmer" run experiments/specs/quick.json --db runs/quick/results.db --work runs/quick/frames
+"$shimmer" report runs/quick/results.db -o results/quick --title "shimmer quick spec"
+echo "report: $root/results/quick/report.md"

@@ -31,6 +31,9 @@ cv::Mat DisplayGrey(const cv::Mat& luminance) {
 Result<std::unique_ptr<SideBySideVideo>> SideBySideVideo::Open(const std::filesystem::path& file, int width,
                                                                int height, double fps, bool with_reference) {
   using R = Result<std::unique_ptr<SideBySideVideo>>;
+  std::error_code ec;
+  if (!file.parent_path().empty()) std::filesystem::create_directories(file.parent_path(), ec);
+  if (ec) return R::Failure(file.parent_path().string() + ": cannot create directory (" + ec.message() + ")");
   std::unique_ptr<SideBySideVideo> video(new SideBySideVideo());
   video->file_ = file;
   video->temporary_ = TemporaryPathFor(file);
@@ -55,7 +58,6 @@ Result<std::unique_ptr<SideBySideVideo>> SideBySideVideo::Open(const std::filesy
     } catch (const cv::Exception&) {
     }
   }
-  std::error_code ec;
   std::filesystem::remove(video->temporary_, ec);
   return R::Failure(file.string() +
                     ": OpenCV cannot encode MP4 here (tried fourcc avc1 and mp4v through FFmpeg); "

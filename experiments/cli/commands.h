@@ -5,6 +5,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace shimmer::cli {
 
@@ -13,6 +14,9 @@ namespace shimmer::cli {
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+// "--param name=value" as a (name, value) pair; UsageError for anything else.
+std::pair<std::string, double> ParseParamOption(const std::string& text);
 
 void AddVariantsCommand(CLI::App& app);
 void AddNdfCommand(CLI::App& app);

@@ -25,23 +25,6 @@ struct NdfOptions {
   bool json = false;
 };
 
-std::pair<std::string, double> ParseParam(const std::string& text) {
-  auto eq = text.find('=');
-  if (eq == std::string::npos || eq == 0 || eq + 1 == text.size())
-    throw UsageError("--param expects name=value, got '" + text + "'");
-  std::string name = text.substr(0, eq);
-  std::string value = text.substr(eq + 1);
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(value, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != value.size()) throw UsageError("--param " + name + ": '" + value + "' is not a number");
-  return {name, v};
-}
-
 void RequireFinite(const std::vector<double>& values, const char* option) {
   for (double v : values)
     if (!std::isfinite(v)) throw UsageError(std::string(option) + " must be finite, got " + std::to_string(v));
@@ -88,7 +71,7 @@ void Run(const NdfOptions& o) {
     throw UsageError("--precision must be float or double, got '" + o.precision + "'");
 
   std::vector<std::pair<std::string, double>> overrides;
-  for (const std::string& p : o.params) overrides.push_back(ParseParam(p));
+  for (const std::string& p : o.params) overrides.push_back(ParseParamOption(p));
   shading::ResolvedParams resolved = shading::ResolveParams(*info, overrides);
   if (!resolved.error.empty()) throw UsageError(resolved.error);
 

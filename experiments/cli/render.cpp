@@ -36,22 +36,6 @@ struct RenderOptions {
   std::string preview;
 };
 
-std::pair<std::string, double> ParseParam(const std::string& text) {
-  auto eq = text.find('=');
-  if (eq == std::string::npos || eq == 0 || eq + 1 == text.size())
-    throw UsageError("--param expects name=value, got '" + text + "'");
-  std::string value = text.substr(eq + 1);
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(value, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != value.size()) throw UsageError("--param " + text.substr(0, eq) + ": '" + value + "' is not a number");
-  return {text.substr(0, eq), v};
-}
-
 void PrintProgress(int done, int total) {
   const int width = 30;
   int filled = total > 0 ? done * width / total : width;
@@ -84,7 +68,7 @@ void Run(const RenderOptions& o) {
   s.camera = o.camera;
   s.variant = o.variant;
   s.variant_file = o.variant_file;
-  for (const std::string& p : o.params) s.param_overrides.push_back(ParseParam(p));
+  for (const std::string& p : o.params) s.param_overrides.push_back(ParseParamOption(p));
   if (o.derivatives == "quad" || o.derivatives == "quad-fine") s.derivatives = shading::DerivativeSource::kQuadFine;
   else if (o.derivatives == "quad-coarse") s.derivatives = shading::DerivativeSource::kQuadCoarse;
   else if (o.derivatives == "analytic") s.derivatives = shading::DerivativeSource::kAnalytic;

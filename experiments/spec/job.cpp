@@ -106,6 +106,20 @@ std::string ShadingCoreVersion() {
 std::string JobId(const Job& job) {
   json j = job.ToJson();
   j["core"] = ShadingCoreVersion();
+  // Defaults live in the C++ catalogue, not in the GLSL the core version
+  // hashes: the id holds every parameter the variant reads, resolved, so a
+  // default spelled out in a spec is the same job and a changed default is not.
+  if (const shading::VariantInfo* info = shading::FindVariant(job.variant)) {
+    const std::vector<std::pair<std::string, double>> overrides(job.params.begin(), job.params.end());
+    const shading::Params<double> p = shading::ResolveParams(*info, overrides).values;
+    json resolved = json::object();
+    for (const shading::ParamInfo& param : info->params)
+      resolved[std::string(param.name)] = param.name == "fp_max"       ? p.fp_max
+                                          : param.name == "fp_min_cap" ? p.fp_min_cap
+                                          : param.name == "sigma2"     ? p.sigma2
+                                                                       : p.kappa;
+    j["params"] = resolved;
+  }
   return Fnv1a64Hex(j.dump());  // nlohmann objects are key-sorted: canonical
 }
 

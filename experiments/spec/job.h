@@ -34,8 +34,9 @@ struct Job {
 // scene, material, camera, variant, parameter values, derivatives).
 std::vector<Job> ExpandJobs(const Spec& spec);
 
-// 16 hex digits: FNV-1a 64 of the canonical JSON of the job and the shading
-// core's version. Stable across runs and machines.
+// 16 hex digits: FNV-1a 64 of the canonical JSON of the job, every parameter
+// value the variant reads (defaults included) and the shading core's version.
+// Stable across runs and machines.
 std::string JobId(const Job& job);
 
 // The reference a job is measured against: shared by every variant and

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <set>
 
 #include "job.h"
@@ -50,10 +51,11 @@ TEST(Spec, IdsAreStableAndReferencesShared) {
   std::set<std::string> refs;
   for (const Job& j : jobs) refs.insert(ReferenceId(j));
   EXPECT_EQ(refs.size(), 2u * 2 * 1);
-  Job changed = jobs[0];
+  const Job& rect = *std::find_if(jobs.begin(), jobs.end(), [](const Job& j) { return j.variant == "k16-beckmann-rect"; });
+  Job changed = rect;
   changed.params["fp_max"] = 0.5;
-  EXPECT_NE(JobId(changed), JobId(jobs[0]));
-  EXPECT_EQ(ReferenceId(changed), ReferenceId(jobs[0]));
+  EXPECT_NE(JobId(changed), JobId(rect));
+  EXPECT_EQ(ReferenceId(changed), ReferenceId(rect));
   EXPECT_EQ(Job::FromJson(jobs[5].ToJson()).ToJson(), jobs[5].ToJson());
 }
 
@@ -120,5 +122,19 @@ TEST(Spec, MalformedSpecsNameTheKeyAndLine) {
   EXPECT_NE(e.find("spin: unknown camera path"), std::string::npos) << e;
 }
 
+}  // namespace
+}  // namespace shimmer::experiments
+
+namespace shimmer::experiments {
+namespace {
+TEST(Spec, IdCoversDefaultParameters) {
+  Job a;
+  a.variant = "tk19";
+  Job b = a;
+  b.params["kappa"] = 0.18;  // the default, spelled out: same job
+  EXPECT_EQ(JobId(a), JobId(b));
+  b.params["kappa"] = 0.2;
+  EXPECT_NE(JobId(a), JobId(b));
+}
 }  // namespace
 }  // namespace shimmer::experiments

@@ -19,6 +19,7 @@ struct RunCliOptions {
   std::string work;
   std::string shard = "0/1";
   bool keep_frames = false;
+  int jobs = 1;
   std::string device;
 };
 
@@ -52,6 +53,8 @@ void Run(const RunCliOptions& o) {
   ro.db_path = o.db.empty() ? (base / "results.db").string() : o.db;
   ro.work_dir = o.work.empty() ? (base / "frames").string() : o.work;
   ro.keep_frames = o.keep_frames;
+  if (o.jobs < 1 || o.jobs > 64) throw UsageError("--jobs must be between 1 and 64, got " + std::to_string(o.jobs));
+  ro.jobs = o.jobs;
   ro.device = o.device;
   std::error_code ec;
   std::filesystem::create_directories(std::filesystem::path(ro.db_path).parent_path().empty()
@@ -78,6 +81,9 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("--db", o->db, "Results store (default runs/<spec name>/results.db)");
   cmd->add_option("--work", o->work, "Frame cache directory (default runs/<spec name>/frames)");
   cmd->add_option("--shard", o->shard, "Run the deterministic slice i/n of the jobs")->capture_default_str();
+  cmd->add_option("--jobs", o->jobs,
+                  "Jobs measured at once (each renders on the device, then measures on the CPU)")
+      ->capture_default_str();
   cmd->add_flag("--keep-frames", o->keep_frames, "Keep rendered frames after measuring");
   cmd->add_option("--device", o->device, "Vulkan device name substring");
   cmd->callback([o] { Run(*o); });

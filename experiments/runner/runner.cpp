@@ -1,6 +1,10 @@
 #include "runner.h"
 
+#include <atomic>
 #include <chrono>
+#include <map>
+#include <mutex>
+#include <thread>
 #include <filesystem>
 #include <fstream>
 
@@ -70,22 +74,30 @@ double MeanGpuMs(const fs::path& dir) {
 
 }  // namespace
 
+fs::path ReferenceDir(const Job& job, const RunOptions& options) {
+  return fs::path(options.work_dir) / ("ref-" + ReferenceId(job));
+}
+
+std::string EnsureReference(const Job& job, const RunOptions& options) {
+  render::RenderSettings reference;
+  if (std::string e = SettingsFor(job, options, &reference); !e.empty()) return e;
+  reference.variant = "none";
+  reference.param_overrides.clear();
+  reference.reference_spp = job.reference.spp;
+  reference.reference_tolerance = job.reference.tolerance;
+  return RenderInto(reference, ReferenceDir(job, options));
+}
+
 Measured MeasureJob(const Job& job, const RunOptions& options) {
   Measured m;
   const auto t0 = std::chrono::steady_clock::now();
   render::RenderSettings test;
   m.error = SettingsFor(job, options, &test);
   if (!m.error.empty()) return m;
-  render::RenderSettings reference = test;
-  reference.variant = "none";
-  reference.param_overrides.clear();
-  reference.reference_spp = job.reference.spp;
-  reference.reference_tolerance = job.reference.tolerance;
-
   const std::string id = JobId(job), ref_id = ReferenceId(job);
-  const fs::path ref_dir = fs::path(options.work_dir) / ("ref-" + ref_id);
+  const fs::path ref_dir = ReferenceDir(job, options);
   const fs::path job_dir = fs::path(options.work_dir) / ("job-" + id);
-  m.error = RenderInto(reference, ref_dir);
+  m.error = EnsureReference(job, options);
   if (!m.error.empty()) return m;
   m.error = RenderInto(test, job_dir);
   if (!m.error.empty()) return m;
@@ -125,40 +137,67 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
     summary.error = error;
     return summary;
   }
+  // One lock per shared reference, so two workers never render the same one.
+  std::map<std::string, std::mutex> reference_locks;
+  for (const Job& job : jobs) reference_locks[ReferenceId(job)];
+
   const auto start = std::chrono::steady_clock::now();
+  std::mutex mutex;  // guards the store, the summary and the progress
   RunProgress progress;
   progress.total = summary.total;
   double computed_s = 0;
-  std::vector<std::string> references_used;
-  for (const Job& job : jobs) {
-    const std::string id = JobId(job);
-    references_used.push_back(ReferenceId(job));
-    progress.current = job.scene + " " + job.material + " " + job.camera + " " + job.variant;
-    if (store->Has(id)) {
-      ++summary.skipped;
-    } else {
-      const auto t0 = std::chrono::steady_clock::now();
-      Measured m = MeasureJob(job, options);
-      if (!m.error.empty()) {
-        summary.error = "job " + id + " (" + progress.current + "): " + m.error;
-        return summary;
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> failed{false};
+
+  auto worker = [&] {
+    for (std::size_t k = next++; k < jobs.size() && !failed; k = next++) {
+      const Job& job = jobs[k];
+      const std::string id = JobId(job);
+      const std::string what = job.scene + " " + job.material + " " + job.camera + " " + job.variant;
+      bool done;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        done = store->Has(id);
       }
-      if (std::string e = store->Insert(m.result); !e.empty()) {
-        summary.error = options.db_path + ": " + e;
-        return summary;
+      double seconds = 0;
+      if (!done) {
+        const auto t0 = std::chrono::steady_clock::now();
+        std::string e;
+        {
+          std::lock_guard<std::mutex> lock(reference_locks.at(ReferenceId(job)));
+          e = EnsureReference(job, options);
+        }
+        Measured m;
+        if (e.empty()) m = MeasureJob(job, options), e = m.error;
+        std::lock_guard<std::mutex> lock(mutex);
+        if (e.empty()) e = store->Insert(m.result);
+        if (!e.empty()) {
+          if (!failed.exchange(true)) summary.error = "job " + id + " (" + what + "): " + e;
+          return;
+        }
+        seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       }
-      ++summary.computed;
-      computed_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::lock_guard<std::mutex> lock(mutex);
+      if (done) ++summary.skipped; else ++summary.computed, computed_s += seconds;
+      ++progress.done;
+      progress.skipped = summary.skipped;
+      progress.current = what;
+      progress.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const int workers = std::max(1, options.jobs);
+      progress.eta_s =
+          summary.computed ? computed_s / summary.computed * (progress.total - progress.done) / workers : 0;
+      if (options.progress) options.progress(progress);
     }
-    ++progress.done;
-    progress.skipped = summary.skipped;
-    progress.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    progress.eta_s = summary.computed ? computed_s / summary.computed * (progress.total - progress.done) : 0;
-    if (options.progress) options.progress(progress);
-  }
+  };
+  std::vector<std::thread> threads;
+  for (int i = 1; i < std::max(1, options.jobs); ++i) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
+  if (failed) return summary;
+
   if (!options.keep_frames) {
     std::error_code ec;
-    for (const std::string& ref : references_used) fs::remove_all(fs::path(options.work_dir) / ("ref-" + ref), ec);
+    for (const auto& [ref, lock] : reference_locks) fs::remove_all(fs::path(options.work_dir) / ("ref-" + ref), ec);
   }
   return summary;
 }

@@ -29,6 +29,7 @@ struct RunOptions {
   std::string work_dir;         // frame cache: references and jobs by id
   int shard_index = 0, shard_count = 1;
   bool keep_frames = false;
+  int jobs = 1;                 // jobs measured at once (each renders, then measures)
   std::string device;           // Vulkan device name substring
   std::function<void(const RunProgress&)> progress;
 };
@@ -47,5 +48,8 @@ struct Measured {
   std::string error;
 };
 Measured MeasureJob(const Job& job, const RunOptions& options);
+
+// Renders the job's reference into the cache unless it is there; returns an error message.
+std::string EnsureReference(const Job& job, const RunOptions& options);
 
 }  // namespace shimmer::experiments

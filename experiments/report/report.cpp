@@ -98,28 +98,34 @@ std::string WriteReport(const std::vector<JobResult>& rows, const std::string& t
         "reference (`tv_err`), its ratio to the reference's own (`tv_ratio`), signed `energy_bias`, "
         "`temporal_diff_err`, spatial `relmse`, `flicker_index` (sensitivity-weighted error spectrum), and GPU "
         "milliseconds per frame (Vulkan timestamps, lavapipe unless stated). Pareto: no other variant of the "
-        "group is both cheaper and lower in `tv_err`. Raw rows: [report.csv](report.csv).\n\n";
+        "group is both cheaper and lower in that error; `supersample-N` is the equal-time brute-force baseline. "
+        "Raw rows: [report.csv](report.csv).\n\n";
   std::vector<std::string> scripts;
   for (auto& [key, group] : groups) {
     std::sort(group.begin(), group.end(),
               [](const JobResult* a, const JobResult* b) { return Label(*a) < Label(*b); });
-    std::vector<double> cost, err;
-    for (const JobResult* r : group) cost.push_back(r->gpu_ms_per_frame), err.push_back(Num(r->metrics, "tv_err"));
+    std::vector<double> cost, err, rel;
+    for (const JobResult* r : group) {
+      cost.push_back(r->gpu_ms_per_frame);
+      err.push_back(Num(r->metrics, "tv_err"));
+      rel.push_back(Num(r->metrics, "relmse"));
+    }
     const std::vector<int> front = ParetoFront(cost, err);
+    const std::vector<int> front_rel = ParetoFront(cost, rel);
+    auto on = [](const std::vector<int>& f, std::size_t i) { return std::find(f.begin(), f.end(), int(i)) != f.end(); };
     const std::string slug = Slug(key);
-    md << "## " << key << "\n\n![speed against error](" << slug << "_pareto.svg) ![flicker spectra](" << slug
-       << "_spectra.svg)\n\n"
+    md << "## " << key << "\n\n![speed against tv_err](" << slug << "_pareto_tv_err.svg) ![speed against relmse]("
+       << slug << "_pareto_relmse.svg) ![flicker spectra](" << slug << "_spectra.svg)\n\n"
        << "| variant | tv_ratio | tv_err | energy_bias | temporal_diff_err | relmse | flicker_index | ms/frame | "
-          "Pareto |\n|---|---|---|---|---|---|---|---|---|\n";
+          "Pareto tv_err | Pareto relmse |\n|---|---|---|---|---|---|---|---|---|---|\n";
     int best = -1;
     for (std::size_t i = 0; i < group.size(); ++i) {
       const JobResult& r = *group[i];
-      const bool on_front = std::find(front.begin(), front.end(), int(i)) != front.end();
       md << "| " << Label(r) << " | " << Fmt(Num(r.metrics, "tv_ratio")) << " | " << Fmt(Num(r.metrics, "tv_err"))
          << " | " << Fmt(Num(r.metrics, "energy_bias"), "%+.3f") << " | "
          << Fmt(Num(r.metrics, "temporal_diff_err")) << " | " << Fmt(Num(r.metrics, "relmse")) << " | "
          << Fmt(FlickerIndex(r.metrics)) << " | " << Fmt(r.gpu_ms_per_frame, "%.2f") << " | "
-         << (on_front ? "●" : "") << " |\n";
+         << (on(front, i) ? "●" : "") << " | " << (on(front_rel, i) ? "●" : "") << " |\n";
       const bool reference_like = r.job.variant.rfind("supersample-", 0) == 0;
       if (!reference_like && !std::isnan(err[i]) && (best < 0 || err[i] < err[best])) best = int(i);
     }
@@ -139,24 +145,30 @@ std::string WriteReport(const std::vector<JobResult>& rows, const std::string& t
     }
 
     // Data and scripts beside the SVGs, so users can restyle them.
-    std::ostringstream pts, ss, spectra, sp;
-    pts << "# ms_per_frame tv_err pareto label\n";
+    std::ostringstream pts, spectra, sp;
+    pts << "# ms_per_frame tv_err relmse pareto_tv_err pareto_relmse label\n";
     for (std::size_t i = 0; i < group.size(); ++i)
-      pts << cost[i] << " " << err[i] << " " << (std::find(front.begin(), front.end(), int(i)) != front.end())
-          << " \"" << Label(*group[i]) << "\"\n";
+      pts << cost[i] << " " << err[i] << " " << rel[i] << " " << on(front, i) << " " << on(front_rel, i) << " \""
+          << Label(*group[i]) << "\"\n";
     pts << "\n\n# supersample-N curve\n";
-    for (const JobResult* r : group)
-      if (r->job.variant.rfind("supersample-", 0) == 0)
-        pts << r->gpu_ms_per_frame << " " << Num(r->metrics, "tv_err") << " 0 \"" << r->job.variant << "\"\n";
-    ss << "set terminal svg size 900,560 dynamic\nset output '" << slug << "_pareto.svg'\n"
-       << "set title '" << key << ": speed against temporal error'\nset xlabel 'GPU ms per frame'\n"
-       << "set ylabel 'tv_err'\nset logscale y\nset key top right\n"
-       << "plot '" << slug << "_pareto.dat' index 0 using 1:2 with points pt 7 title 'variants', \\\n"
-       << "     '' index 0 using ($3 > 0 ? $1 : 1/0):2 with points pt 6 ps 2 title 'Pareto front', \\\n"
-       << "     '' index 0 using 1:2:4 with labels offset 0.5,0.5 left font ',8' notitle, \\\n"
-       << "     '' index 1 using 1:2 with linespoints dt 2 title 'supersample-N (equal-time baseline)'\n";
+    for (std::size_t i = 0; i < group.size(); ++i)
+      if (group[i]->job.variant.rfind("supersample-", 0) == 0)
+        pts << cost[i] << " " << err[i] << " " << rel[i] << " 0 0 \"" << group[i]->job.variant << "\"\n";
     if (std::string e = WriteFile(out / (slug + "_pareto.dat"), pts.str()); !e.empty()) return e;
-    if (std::string e = WriteFile(out / (slug + "_pareto.gp"), ss.str()); !e.empty()) return e;
+    for (const auto& [metric, column] : {std::pair<std::string, int>{"tv_err", 2}, {"relmse", 3}}) {
+      const std::string y = std::to_string(column), flag = std::to_string(column + 2);
+      std::ostringstream ss;
+      ss << "set terminal svg size 900,560 dynamic\nset output '" << slug << "_pareto_" << metric << ".svg'\n"
+         << "set title '" << key << ": speed against " << metric << "'\nset xlabel 'GPU ms per frame'\n"
+         << "set ylabel '" << metric << "'\nset logscale y\nset key top right\n"
+         << "plot '" << slug << "_pareto.dat' index 0 using 1:" << y << " with points pt 7 title 'variants', \\\n"
+         << "     '' index 0 using ($" << flag << " > 0 ? $1 : 1/0):" << y
+         << " with points pt 6 ps 2 title 'Pareto front', \\\n"
+         << "     '' index 0 using 1:" << y << ":6 with labels offset 0.5,0.5 left font ',8' notitle, \\\n"
+         << "     '' index 1 using 1:" << y << " with linespoints dt 2 title 'supersample-N (equal-time baseline)'\n";
+      if (std::string e = WriteFile(out / (slug + "_pareto_" + metric + ".gp"), ss.str()); !e.empty()) return e;
+      scripts.push_back(slug + "_pareto_" + metric + ".gp");
+    }
     spectra << "# one block per variant: freq_hz psd\n";
     sp << "set terminal svg size 900,560 dynamic\nset output '" << slug << "_spectra.svg'\n"
        << "set title '" << key << ": flicker spectra of the error'\nset xlabel 'Hz'\nset ylabel 'PSD'\n"
@@ -176,7 +188,6 @@ std::string WriteReport(const std::vector<JobResult>& rows, const std::string& t
     sp << "\n";
     if (std::string e = WriteFile(out / (slug + "_spectra.dat"), spectra.str()); !e.empty()) return e;
     if (std::string e = WriteFile(out / (slug + "_spectra.gp"), sp.str()); !e.empty()) return e;
-    scripts.push_back(slug + "_pareto.gp");
     scripts.push_back(slug + "_spectra.gp");
   }
   md << "## Summary\n\n" << summary.str();

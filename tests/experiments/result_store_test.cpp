@@ -121,7 +121,9 @@ TEST(Report, WritesTablesCsvAndPlotScripts) {
   std::string text((std::istreambuf_iterator<char>(md)), {});
   EXPECT_NE(text.find("| tk19 fp_max=1 |"), std::string::npos) << text;
   EXPECT_NE(text.find("## Summary"), std::string::npos);
-  EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_pareto.gp"));
+  EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_pareto_tv_err.gp"));
+  EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_pareto_relmse.gp"));
+  EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp"));
   EXPECT_NE(WriteReport({}, "t", (dir.path / "empty").string(), &warnings), "");
 }
 

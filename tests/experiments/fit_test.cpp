@@ -1,0 +1,62 @@
+// The fitting code on synthetic objectives with known optima (no rendering).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fit.h"
+
+namespace shimmer::experiments {
+namespace {
+
+// Deterministic "aliasing noise": a hash of p in [-1, 1].
+double Noise(double p) {
+  const double x = std::sin(p * 12.9898 * 437.0) * 43758.5453;
+  return 2 * (x - std::floor(x)) - 1;
+}
+
+TEST(Fit, NoisyBowlFindsTheMinimum) {
+  int calls = 0;
+  auto j = [&](double p) {
+    ++calls;
+    const double d = std::log(p / 0.3);
+    return d * d + 0.002 * Noise(p);
+  };
+  const Fit1D fit = Minimize1D(j, 0.01, 4, 7);
+  EXPECT_NEAR(std::log(fit.best / 0.3), 0.0, 0.1) << fit.best;
+  EXPECT_EQ(fit.evaluations, calls);
+  EXPECT_EQ(int(fit.samples.size()), calls);
+  for (const auto& [p, v] : fit.samples) {
+    EXPECT_GE(p, 0.01 * (1 - 1e-12));
+    EXPECT_LE(p, 4 * (1 + 1e-12));
+    EXPECT_LE(fit.objective, v + 1e-15);
+  }
+}
+
+TEST(Fit, PlateauStaysInBoundsAndNoWorseThanTheSweep) {
+  // Flat above 0.5, rising below: any p >= 0.5 is optimal.
+  auto j = [](double p) { return p < 0.5 ? std::log(0.5 / p) : 0.0; };
+  const Fit1D fit = Minimize1D(j, 0.01, 4, 5, {1.0, 0.7});
+  EXPECT_GE(fit.best, 0.5);
+  EXPECT_LE(fit.best, 4.0);
+  EXPECT_DOUBLE_EQ(fit.objective, 0.0);
+}
+
+TEST(Fit, OptimumAtTheBoundIsFound) {
+  auto j = [](double p) { return p; };  // decreasing towards lo
+  const Fit1D fit = Minimize1D(j, 0.05, 2, 6);
+  EXPECT_NEAR(fit.best, 0.05, 1e-9);
+}
+
+TEST(Fit, PowerLawRecoversKnownCurveDespiteAnOutlier) {
+  std::vector<double> alpha{0.01, 0.02, 0.05, 0.1, 0.2, 0.5}, value;
+  for (double a : alpha) value.push_back(0.8 * std::pow(a, 0.6));
+  value[3] *= 5;  // one odd material
+  const PowerLaw law = FitPowerLaw(alpha, value);
+  EXPECT_NEAR(law.a, 0.8, 0.08);
+  EXPECT_NEAR(law.b, 0.6, 0.05);
+  EXPECT_EQ(law.residuals.size(), alpha.size());
+  EXPECT_GT(std::abs(law.residuals[3]), 1.0);  // the outlier stays an outlier
+}
+
+}  // namespace
+}  // namespace shimmer::experiments

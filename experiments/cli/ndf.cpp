@@ -85,13 +85,8 @@ void Run(const NdfOptions& o) {
   }
 
   nlohmann::json params = nlohmann::json::object();
-  for (const shading::ParamInfo& p : info->params) {
-    const auto& v = resolved.values;
-    params[std::string(p.name)] = p.name == "fp_max"       ? v.fp_max
-                                  : p.name == "fp_min_cap" ? v.fp_min_cap
-                                  : p.name == "sigma2"     ? v.sigma2
-                                                           : v.kappa;
-  }
+  for (const shading::ParamInfo& p : info->params)
+    params[std::string(p.name)] = shading::ParamValue(resolved.values, p.name);
   double ax = o.alpha[0], ay = o.alpha.size() > 1 ? o.alpha[1] : o.alpha[0];
   nlohmann::json out = {{"variant", o.variant},
                         {"ndf", o.ndf},

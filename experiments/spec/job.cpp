@@ -114,10 +114,7 @@ std::string JobId(const Job& job) {
     const shading::Params<double> p = shading::ResolveParams(*info, overrides).values;
     json resolved = json::object();
     for (const shading::ParamInfo& param : info->params)
-      resolved[std::string(param.name)] = param.name == "fp_max"       ? p.fp_max
-                                          : param.name == "fp_min_cap" ? p.fp_min_cap
-                                          : param.name == "sigma2"     ? p.sigma2
-                                                                       : p.kappa;
+      resolved[std::string(param.name)] = shading::ParamValue(p, param.name);
     j["params"] = resolved;
   }
   return Fnv1a64Hex(j.dump());  // nlohmann objects are key-sorted: canonical

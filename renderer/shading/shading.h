@@ -135,6 +135,9 @@ struct ResolvedParams {
   Params<double> values;
   std::string error;  // empty when fine
 };
+// The value of the parameter called `name` (fp_max, fp_min_cap, sigma2, kappa).
+double ParamValue(const Params<double>& params, std::string_view name);
+
 ResolvedParams ResolveParams(const VariantInfo& info,
                              std::span<const std::pair<std::string, double>> overrides);
 

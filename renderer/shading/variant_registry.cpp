@@ -90,6 +90,13 @@ std::optional<Ndf> ParseNdf(std::string_view name) {
 
 std::string_view NdfName(Ndf ndf) { return ndf == Ndf::kGgx ? "ggx" : "beckmann"; }
 
+double ParamValue(const Params<double>& params, std::string_view name) {
+  if (name == "fp_max") return params.fp_max;
+  if (name == "fp_min_cap") return params.fp_min_cap;
+  if (name == "sigma2") return params.sigma2;
+  return params.kappa;
+}
+
 ResolvedParams ResolveParams(const VariantInfo& info,
                              std::span<const std::pair<std::string, double>> overrides) {
   ResolvedParams r;

@@ -107,6 +107,7 @@ Measured MeasureJob(const Job& job, const RunOptions& options) {
   mo.reference = ref_dir;
   mo.highlight_mask = job.metrics.highlight_mask;
   mo.highlight.threshold = job.metrics.highlight_threshold;
+  mo.highlight.empty_falls_back_to_frame = true;
   mo.segment_length = job.metrics.segment;
   auto report = metrics::ComputeMetrics(mo);
   if (!report.ok()) {

@@ -57,6 +57,10 @@ std::vector<std::map<std::string, double>> ParameterGrid(const std::map<std::str
 
 }  // namespace
 
+bool ReadsDerivatives(const std::string& variant) {
+  return variant != "none" && variant.rfind("supersample-", 0) != 0;
+}
+
 std::vector<Job> ExpandJobs(const Spec& spec) {
   std::vector<Job> jobs;
   for (const std::string& scene : spec.scenes)
@@ -65,6 +69,7 @@ std::vector<Job> ExpandJobs(const Spec& spec) {
         for (const VariantSweep& variant : spec.variants)
           for (const auto& params : ParameterGrid(variant.params))
             for (const std::string& derivatives : spec.derivatives) {
+              if (!ReadsDerivatives(variant.name) && derivatives != spec.derivatives.front()) continue;
               Job job;
               job.scene = scene;
               job.material = material;

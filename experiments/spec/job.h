@@ -30,8 +30,13 @@ struct Job {
   static Job FromJson(const nlohmann::json& j);
 };
 
+// False for `none` and `supersample-N`: their pixels never read the
+// derivatives, so one derivative source stands for all.
+bool ReadsDerivatives(const std::string& variant);
+
 // The cross product, in a deterministic order (spec order, outermost first:
-// scene, material, camera, variant, parameter values, derivatives).
+// scene, material, camera, variant, parameter values, derivatives). A variant
+// that does not read derivatives gets one job, with the spec's first source.
 std::vector<Job> ExpandJobs(const Spec& spec);
 
 // 16 hex digits: FNV-1a 64 of the canonical JSON of the job, every parameter

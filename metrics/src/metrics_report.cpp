@@ -110,6 +110,10 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
     if (!mask) return R::Failure(mask.error());
     region = *mask;
     report.region = "highlight";
+    if (cv::countNonZero(region) == 0 && options.highlight.empty_falls_back_to_frame) {
+      region = cv::Mat::ones(height, width, CV_8U);
+      report.region = "frame (highlight mask empty)";
+    }
   } else {
     region = cv::Mat::ones(height, width, CV_8U);
     report.region = "frame";

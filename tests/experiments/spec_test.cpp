@@ -35,9 +35,14 @@ TEST(Spec, ParsesAndExpandsTheCrossProduct) {
   const auto& kappa = r.spec.variants[2].params.at("kappa");
   ASSERT_EQ(kappa.size(), 3u);
   EXPECT_NEAR(kappa[1], 0.1, 1e-12);  // log range: geometric midpoint
-  // 2 scenes x 2 materials x 1 camera x (1 + 2 + 3*2 + 1) variant points x 2 derivative sources
+  // 2 scenes x 2 materials x 1 camera x ((2 + 3*2) variant points x 2 derivative sources + none + supersample-2,
+  // which never read derivatives)
   const auto jobs = ExpandJobs(r.spec);
-  EXPECT_EQ(jobs.size(), 2u * 2 * 1 * 10 * 2);
+  EXPECT_EQ(jobs.size(), 2u * 2 * 1 * (8 * 2 + 2));
+  for (const Job& j : jobs)
+    if (!ReadsDerivatives(j.variant)) {
+      EXPECT_EQ(j.derivatives, "quad");
+    }
   std::set<std::string> ids;
   for (const Job& j : jobs) ids.insert(JobId(j));
   EXPECT_EQ(ids.size(), jobs.size()) << "every job has its own id";

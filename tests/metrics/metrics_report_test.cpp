@@ -209,6 +209,12 @@ TEST(MetricsReport, HighlightMaskRestrictsTheRegion) {
   auto empty = ComputeMetrics(o);
   ASSERT_FALSE(empty);
   EXPECT_NE(empty.error().find("highlight mask is empty"), std::string::npos);
+
+  o.highlight.empty_falls_back_to_frame = true;
+  MetricsReport fallback = Measure(o);
+  EXPECT_EQ(fallback.region, "frame (highlight mask empty)");
+  EXPECT_EQ(fallback.pixels, whole.pixels);
+  EXPECT_DOUBLE_EQ(fallback.tv_test, whole.tv_test);
 }
 
 TEST(MetricsReport, MaskFileSelectsPixels) {

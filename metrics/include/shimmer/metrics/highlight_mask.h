@@ -16,6 +16,11 @@ struct HighlightMaskOptions {
   // a highlight that moves by a pixel between frames stays inside the mask,
   // and the dark pixels around it, where aliasing flickers, are included.
   int dilate_radius = 2;
+  // A rough material can keep every pixel under the threshold. By default that
+  // is an error (the user asked for highlights and there are none); batch runs
+  // over many materials instead measure the whole frame and say so in
+  // `region`, so one broad lobe does not stop a spec.
+  bool empty_falls_back_to_frame = false;
 };
 
 // Union over frames of (Y_specular > threshold), dilated. Reads the `specular`

@@ -7,6 +7,8 @@
 #include <string>
 #include <utility>
 
+#include "runner.h"
+
 namespace shimmer::cli {
 
 // Thrown by a subcommand for bad input; main prints "shimmer: error: <what>"
@@ -18,6 +20,11 @@ struct UsageError : std::runtime_error {
 // "--param name=value" as a (name, value) pair; UsageError for anything else.
 std::pair<std::string, double> ParseParamOption(const std::string& text);
 
+// Fills db_path and work_dir: the given paths, else runs/<spec>/<db_file> and
+// runs/<spec>/frames; creates their directories (UsageError when it cannot).
+void StorePaths(const std::string& spec_name, const std::string& db, const std::string& work,
+                const std::string& db_file, experiments::RunOptions* ro);
+
 void AddVariantsCommand(CLI::App& app);
 void AddNdfCommand(CLI::App& app);
 void AddRenderCommand(CLI::App& app);
@@ -26,5 +33,6 @@ void AddRunCommand(CLI::App& app);
 void AddMergeCommand(CLI::App& app);
 void AddSweepCommand(CLI::App& app);
 void AddReportCommand(CLI::App& app);
+void AddFitCommand(CLI::App& app);
 
 }  // namespace shimmer::cli

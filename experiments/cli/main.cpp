@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   shimmer::cli::AddMergeCommand(app);
   shimmer::cli::AddSweepCommand(app);
   shimmer::cli::AddReportCommand(app);
+  shimmer::cli::AddFitCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

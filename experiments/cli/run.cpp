@@ -49,20 +49,11 @@ void Run(const RunCliOptions& o) {
   experiments::RunOptions ro;
   if (!experiments::ParseShard(o.shard, &ro.shard_index, &ro.shard_count))
     throw UsageError("--shard must be i/n with 0 <= i < n, got '" + o.shard + "'");
-  const std::filesystem::path base = std::filesystem::path("runs") / spec.spec.name;
-  ro.db_path = o.db.empty() ? (base / "results.db").string() : o.db;
-  ro.work_dir = o.work.empty() ? (base / "frames").string() : o.work;
+  StorePaths(spec.spec.name, o.db, o.work, "results.db", &ro);
   ro.keep_frames = o.keep_frames;
   if (o.jobs < 1 || o.jobs > 64) throw UsageError("--jobs must be between 1 and 64, got " + std::to_string(o.jobs));
   ro.jobs = o.jobs;
   ro.device = o.device;
-  std::error_code ec;
-  std::filesystem::create_directories(std::filesystem::path(ro.db_path).parent_path().empty()
-                                          ? "."
-                                          : std::filesystem::path(ro.db_path).parent_path(),
-                                      ec);
-  std::filesystem::create_directories(ro.work_dir, ec);
-  if (ec) throw UsageError(ro.work_dir + ": cannot create the frame directory: " + ec.message());
   const bool tty = isatty(fileno(stderr));
   ro.progress = [tty](const experiments::RunProgress& p) { PrintProgress(p, tty); };
   const auto jobs = experiments::ExpandJobs(spec.spec);
@@ -73,6 +64,19 @@ void Run(const RunCliOptions& o) {
 }
 
 }  // namespace
+
+void StorePaths(const std::string& spec_name, const std::string& db, const std::string& work,
+                const std::string& db_file, experiments::RunOptions* ro) {
+  const std::filesystem::path base = std::filesystem::path("runs") / spec_name;
+  ro->db_path = db.empty() ? (base / db_file).string() : db;
+  ro->work_dir = work.empty() ? (base / "frames").string() : work;
+  const std::filesystem::path db_dir = std::filesystem::path(ro->db_path).parent_path();
+  std::error_code ec;
+  std::filesystem::create_directories(db_dir.empty() ? "." : db_dir, ec);
+  if (ec) throw UsageError(db_dir.string() + ": cannot create the store's directory: " + ec.message());
+  std::filesystem::create_directories(ro->work_dir, ec);
+  if (ec) throw UsageError(ro->work_dir + ": cannot create the frame directory: " + ec.message());
+}
 
 void AddRunCommand(CLI::App& app) {
   auto o = std::make_shared<RunCliOptions>();

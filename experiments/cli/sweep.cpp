@@ -3,11 +3,11 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #include "commands.h"
 #include "job.h"
+#include "output_files.h"
 #include "runner.h"
 #include "spec.h"
 
@@ -59,10 +59,6 @@ experiments::Spec SweepSpec(const SweepOptions& o, std::string* name) {
   return r.spec;
 }
 
-double Num(const nlohmann::json& j, const char* key) {
-  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : std::nan("");
-}
-
 void Run(const SweepOptions& o) {
   std::string name;
   const experiments::Spec spec = SweepSpec(o, &name);
@@ -78,22 +74,17 @@ void Run(const SweepOptions& o) {
     experiments::Measured m = experiments::MeasureJob(job, ro);
     if (!m.error.empty()) throw std::runtime_error(m.error);
     const auto& j = m.result.metrics;
-    const double fi = j.contains("flicker") ? Num(j["flicker"], "flicker_index") : std::nan("");
+    const double fi = j.contains("flicker") ? experiments::NumberOr(j["flicker"], "flicker_index") : std::nan("");
     const double v = job.params.at(name);
-    std::printf("%12.5g %10.4g %10.4g %12.4g %10.4g %13.4g %12.3f\n", v, Num(j, "tv_ratio"), Num(j, "tv_err"),
-                Num(j, "energy_bias"), Num(j, "relmse"), fi, m.result.gpu_ms_per_frame);
+    std::printf("%12.5g %10.4g %10.4g %12.4g %10.4g %13.4g %12.3f\n", v, experiments::NumberOr(j, "tv_ratio"), experiments::NumberOr(j, "tv_err"),
+                experiments::NumberOr(j, "energy_bias"), experiments::NumberOr(j, "relmse"), fi, m.result.gpu_ms_per_frame);
     std::fflush(stdout);
-    csv << v << "," << Num(j, "tv_ratio") << "," << Num(j, "tv_err") << "," << Num(j, "energy_bias") << ","
-        << Num(j, "relmse") << "," << fi << "," << m.result.gpu_ms_per_frame << "\n";
+    csv << v << "," << experiments::NumberOr(j, "tv_ratio") << "," << experiments::NumberOr(j, "tv_err") << "," << experiments::NumberOr(j, "energy_bias") << ","
+        << experiments::NumberOr(j, "relmse") << "," << fi << "," << m.result.gpu_ms_per_frame << "\n";
   }
   if (o.csv.empty()) return;
   const std::filesystem::path path(o.csv);
-  const auto write = [](const std::filesystem::path& p, const std::string& text) {
-    const std::filesystem::path tmp = p.string() + ".tmp";
-    std::ofstream(tmp) << text;
-    std::filesystem::rename(tmp, p);
-  };
-  write(path, csv.str());
+  if (std::string e = experiments::WriteFileAtomic(path, csv.str()); !e.empty()) throw std::runtime_error(e);
   // The plot script sits beside the data so users can restyle it.
   std::filesystem::path gp = path, svg = path;
   gp.replace_extension(".gp");
@@ -105,11 +96,10 @@ void Run(const SweepOptions& o) {
          << "set y2tics\nset ytics nomirror\n"
          << "plot '" << path.filename().string() << "' using 1:2 with linespoints, '' using 1:6 with linespoints, "
          << "'' using 1:4 axes x1y2 with linespoints\n";
-  write(gp, script.str());
-  const std::string cmd = "cd '" + (path.parent_path().empty() ? std::string(".") : path.parent_path().string()) +
-                          "' && gnuplot '" + gp.filename().string() + "' 2>/dev/null";
-  if (std::system(cmd.c_str()) != 0)
-    std::fprintf(stderr, "shimmer: warning: gnuplot failed or is missing; %s is ready to plot\n", gp.c_str());
+  if (std::string e = experiments::WriteFileAtomic(gp, script.str()); !e.empty()) throw std::runtime_error(e);
+  std::vector<std::string> warnings;
+  experiments::RunGnuplot(path.parent_path(), {gp.filename().string()}, &warnings);
+  for (const std::string& w : warnings) std::fprintf(stderr, "shimmer: warning: %s\n", w.c_str());
   std::printf("wrote %s, %s, %s\n", path.c_str(), gp.c_str(), svg.c_str());
 }
 

@@ -14,14 +14,16 @@ struct Fit1D {
   double objective = 0;  // J(best)
   int evaluations = 0;   // calls of J, sweep included
   bool ceres_improved = false;  // false when the sweep's best point stood
+  // evaluations == samples.size(): distinct values of p
   std::vector<std::pair<double, double>> samples;  // (p, J(p)) of every evaluation
 };
 
-// Minimises J on [lo, hi] (lo > 0): a log-spaced sweep of `sweep_points`
-// plus `extra_points` (e.g. published defaults), then Ceres from the best of
-// them, on u = log p, with central differences whose step (10 % in log p) is
-// large against the objective's aliasing noise. The better of the two wins,
-// so the result is never worse than any swept point.
+// Minimises J on [lo, hi] (lo > 0) on u = log p: a log-spaced sweep of
+// `sweep_points` plus `extra_points`, then Ceres inside the bracket of the
+// best swept point's neighbours, solving g(u) = 0 for the central-difference
+// gradient g with a fixed step of 0.1 in u (10 % in p), large against the
+// aliasing noise of a rendered J. The lowest J evaluated wins, so the result
+// is never worse than any swept point. Each distinct p is evaluated once.
 Fit1D Minimize1D(const std::function<double(double)>& objective, double lo, double hi, int sweep_points,
                  const std::vector<double>& extra_points = {});
 

@@ -8,15 +8,15 @@
 #include <set>
 #include <sstream>
 
+#include "output_files.h"
+
 namespace shimmer::experiments {
 
 namespace fs = std::filesystem;
 
 namespace {
 
-double Num(const nlohmann::json& j, const char* key) {
-  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : std::nan("");
-}
+double Num(const nlohmann::json& j, const char* key) { return NumberOr(j, key); }
 double FlickerIndex(const nlohmann::json& m) {
   return m.contains("flicker") ? Num(m["flicker"], "flicker_index") : std::nan("");
 }
@@ -31,30 +31,8 @@ std::string Label(const JobResult& r) {
   return label;
 }
 
-std::string Fmt(double v, const char* f = "%.4g") {
-  if (std::isnan(v)) return "–";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
-
-std::string WriteFile(const fs::path& path, const std::string& text) {
-  const fs::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << text;
-    if (!out) return tmp.string() + ": cannot write";
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  return ec ? path.string() + ": " + ec.message() : "";
-}
-
-std::string Slug(const std::string& s) {
-  std::string out;
-  for (char c : s) out += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
-  return out;
-}
+std::string Fmt(double v, const char* f = "%.4g") { return FormatNumber(v, f); }
+std::string WriteFile(const fs::path& path, const std::string& text) { return WriteFileAtomic(path, text); }
 
 }  // namespace
 
@@ -203,10 +181,7 @@ std::string WriteReport(const std::vector<JobResult>& rows, const std::string& t
   }
   md << "## Summary\n\n" << summary.str();
   if (std::string e = WriteFile(out / "report.md", md.str()); !e.empty()) return e;
-  for (const std::string& s : scripts) {
-    const std::string cmd = "cd '" + out.string() + "' && gnuplot '" + s + "' 2>/dev/null";
-    if (std::system(cmd.c_str()) != 0 && warnings) warnings->push_back("gnuplot failed or is missing: " + s);
-  }
+  RunGnuplot(out, scripts, warnings);
   return "";
 }
 

@@ -125,6 +125,94 @@ VariantSweep ParseVariant(const json& j) {
   return v;
 }
 
+ShotSet ParseShots(const json& j, const std::string& key) {
+  if (!j.is_object()) throw SpecError{key, "must be {\"scenes\": [...], \"cameras\": [...]}"};
+  RejectUnknownKeys(j, {"scenes", "cameras"}, key);
+  for (const char* required : {"scenes", "cameras"})
+    if (!j.contains(required)) throw SpecError{key, std::string("needs \"") + required + "\""};
+  ShotSet shots;
+  shots.scenes = StringList(j["scenes"], key + ".scenes");
+  for (const std::string& scene : shots.scenes) {
+    const auto loaded = scene::LoadScene(scene);
+    if (!loaded.ok()) throw SpecError{scene, loaded.error};
+  }
+  shots.cameras = StringList(j["cameras"], key + ".cameras");
+  for (const std::string& c : shots.cameras)
+    if (!scene::IsCameraPath(c)) throw SpecError{c, "unknown camera path (orbit, pan, dolly, vr-jitter)"};
+  return shots;
+}
+
+// Everything a fit could trip on later is checked here, before any render:
+// bounds, the parameter, each variant having it, and NDF restrictions
+// against the spec's materials.
+FitConfig ParseFit(const json& f, const Spec& spec) {
+  if (!f.is_object()) throw SpecError{"fit", "entries must be objects"};
+  RejectUnknownKeys(f,
+                    {"variants", "param", "bounds", "sweep_points", "defaults", "derivatives", "train", "validate",
+                     "weights"},
+                    "fit");
+  for (const char* required : {"variants", "param", "train", "validate"})
+    if (!f.contains(required)) throw SpecError{"fit", std::string("needs \"") + required + "\""};
+  FitConfig c;
+  if (!f["param"].is_string()) throw SpecError{"param", "must be a parameter name"};
+  c.param = f["param"];
+  c.variants = StringList(f["variants"], "variants");
+  for (const std::string& name : c.variants) {
+    const shading::VariantInfo* info = shading::FindVariant(name);
+    if (!info) throw SpecError{name, "unknown variant (see `shimmer variants`); fits take catalogue variants"};
+    std::string names;
+    bool has = false;
+    for (const shading::ParamInfo& p : info->params) {
+      has = has || p.name == c.param;
+      names += (names.empty() ? "" : ", ") + std::string(p.name);
+    }
+    if (!has)
+      throw SpecError{name, "has no parameter \"" + c.param + "\" to fit (its parameters: " +
+                                (names.empty() ? "none" : names) + ")"};
+    if (info->ggx_only)
+      for (const std::string& m : spec.materials)
+        if (scene::ParseMaterial(m, {}).value.ndf != shading::Ndf::kGgx)
+          throw SpecError{name, "takes GGX materials only, and the spec lists " + m};
+  }
+  if (f.contains("bounds")) {
+    const json& b = f["bounds"];
+    if (!b.is_array() || b.size() != 2) throw SpecError{"bounds", "must be [lo, hi]"};
+    c.lo = Number(b[0], "bounds");
+    c.hi = Number(b[1], "bounds");
+  }
+  // The search runs on log p, so the bounds must be positive.
+  if (!(c.lo > 0 && c.lo < c.hi))
+    throw SpecError{"bounds", "are empty or not positive: need 0 < lo < hi, found [" + std::to_string(c.lo) + ", " +
+                                  std::to_string(c.hi) + "]"};
+  if (f.contains("sweep_points")) c.sweep_points = PositiveInt(f["sweep_points"], "sweep_points");
+  if (c.sweep_points < 2) throw SpecError{"sweep_points", "must be at least 2"};
+  if (f.contains("defaults")) {
+    c.defaults = ParameterValues(f["defaults"], "defaults");
+    for (double d : c.defaults)
+      if (d <= 0) throw SpecError{"defaults", "must be positive"};
+  }
+  if (f.contains("derivatives")) {
+    if (!f["derivatives"].is_string()) throw SpecError{"derivatives", "must be quad, quad-coarse or analytic"};
+    c.derivatives = f["derivatives"];
+    if (c.derivatives != "quad" && c.derivatives != "quad-coarse" && c.derivatives != "analytic")
+      throw SpecError{"derivatives", "must be quad, quad-coarse or analytic, found \"" + c.derivatives + "\""};
+  }
+  c.train = ParseShots(f["train"], "train");
+  c.validate = ParseShots(f["validate"], "validate");
+  if (f.contains("weights")) {
+    const json& w = f["weights"];
+    if (!w.is_object()) throw SpecError{"weights", "must be {\"flicker\", \"spatial\", \"bias\"}"};
+    RejectUnknownKeys(w, {"flicker", "spatial", "bias"}, "fit.weights");
+    if (w.contains("flicker")) c.weights.flicker = Number(w["flicker"], "flicker");
+    if (w.contains("spatial")) c.weights.spatial = Number(w["spatial"], "spatial");
+    if (w.contains("bias")) c.weights.bias = Number(w["bias"], "bias");
+    if (c.weights.flicker < 0 || c.weights.spatial < 0 || c.weights.bias < 0 ||
+        c.weights.flicker + c.weights.spatial + c.weights.bias <= 0)
+      throw SpecError{"weights", "must be non-negative and not all zero"};
+  }
+  return c;
+}
+
 Spec ParseSpecObject(const json& j) {
   if (!j.is_object()) throw SpecError{"", "a spec is a JSON object"};
   RejectUnknownKeys(j,
@@ -199,15 +287,12 @@ Spec ParseSpecObject(const json& j) {
   }
   if (j.contains("fit")) {
     const json& f = j["fit"];
-    if (!f.is_object()) throw SpecError{"fit", "must be an object"};
-    RejectUnknownKeys(f, {"weights"}, "fit");
-    if (f.contains("weights")) {
-      const json& w = f["weights"];
-      if (!w.is_object()) throw SpecError{"weights", "must be {\"flicker\", \"spatial\", \"bias\"}"};
-      RejectUnknownKeys(w, {"flicker", "spatial", "bias"}, "fit.weights");
-      if (w.contains("flicker")) s.fit_weights.flicker = Number(w["flicker"], "flicker");
-      if (w.contains("spatial")) s.fit_weights.spatial = Number(w["spatial"], "spatial");
-      if (w.contains("bias")) s.fit_weights.bias = Number(w["bias"], "bias");
+    if (f.is_object()) {
+      s.fits.push_back(ParseFit(f, s));
+    } else if (f.is_array() && !f.empty()) {
+      for (const json& entry : f) s.fits.push_back(ParseFit(entry, s));
+    } else {
+      throw SpecError{"fit", "must be an object or a non-empty list of objects"};
     }
   }
   return s;

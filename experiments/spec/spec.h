@@ -35,6 +35,25 @@ struct FitWeights {
   double flicker = 1, spatial = 1, bias = 1;
 };
 
+// A set of shots (scene x camera) the objective averages over.
+struct ShotSet {
+  std::vector<std::string> scenes, cameras;
+};
+
+// One `fit` entry: for each of the spec's materials and each variant, the
+// value of `param` in [lo, hi] that minimises the objective on `train`,
+// validated on `validate` against the published `defaults`.
+struct FitConfig {
+  std::vector<std::string> variants;
+  std::string param = "fp_max";
+  double lo = 0.01, hi = 4;
+  int sweep_points = 7;
+  std::vector<double> defaults{1.0, 0.7};  // seed 000's fp_max = 1, seed 001's 0.7
+  std::string derivatives = "quad";
+  ShotSet train, validate;
+  FitWeights weights;
+};
+
 struct Spec {
   std::string name;
   std::vector<std::string> scenes;
@@ -47,7 +66,7 @@ struct Spec {
   double fps = 30;
   ReferenceQuality reference;
   MetricOptions metrics;
-  FitWeights fit_weights;
+  std::vector<FitConfig> fits;  // the `fit` section: one object or a list
 };
 
 struct SpecResult {

@@ -25,6 +25,13 @@ CREATE TABLE IF NOT EXISTS jobs (
   revision TEXT, core_version TEXT,
   finished_at TEXT DEFAULT (datetime('now'))
 );
+CREATE TABLE IF NOT EXISTS fits (
+  variant TEXT NOT NULL, param TEXT NOT NULL, material TEXT NOT NULL,
+  value REAL, j_train REAL, j_validate REAL,
+  result TEXT NOT NULL,
+  finished_at TEXT DEFAULT (datetime('now')),
+  PRIMARY KEY (variant, param, material)
+);
 )sql";
 
 struct Statement {
@@ -122,14 +129,23 @@ std::string ResultStore::Insert(const JobResult& r) {
   return Exec("COMMIT;");
 }
 
-std::vector<JobResult> ResultStore::All() {
+std::vector<JobResult> ResultStore::All() { return Select("", ""); }
+
+std::optional<JobResult> ResultStore::Get(const std::string& id) {
+  std::vector<JobResult> rows = Select("WHERE id = ?", id);
+  if (rows.empty()) return std::nullopt;
+  return std::move(rows.front());
+}
+
+std::vector<JobResult> ResultStore::Select(const std::string& where, const std::string& id) {
   std::vector<JobResult> rows;
   Statement s;
-  sqlite3_prepare_v2(db_,
-                     "SELECT id, reference_id, scene, material, camera, variant, params, derivatives, width, height, "
-                     "frames, fps, reference_spp, reference_tolerance, metrics, gpu_ms_per_frame, wall_s, revision, "
-                     "core_version, job FROM jobs ORDER BY id",
-                     -1, &s.stmt, nullptr);
+  const std::string sql =
+      "SELECT id, reference_id, scene, material, camera, variant, params, derivatives, width, height, "
+      "frames, fps, reference_spp, reference_tolerance, metrics, gpu_ms_per_frame, wall_s, revision, "
+      "core_version, job FROM jobs " + where + " ORDER BY id";
+  sqlite3_prepare_v2(db_, sql.c_str(), -1, &s.stmt, nullptr);
+  if (!id.empty()) sqlite3_bind_text(s.stmt, 1, id.c_str(), -1, SQLITE_TRANSIENT);
   auto str = [&](int c) {
     const unsigned char* t = sqlite3_column_text(s.stmt, c);
     return t ? std::string(reinterpret_cast<const char*>(t)) : std::string();
@@ -159,6 +175,35 @@ std::vector<JobResult> ResultStore::All() {
     rows.push_back(std::move(r));
   }
   return rows;
+}
+
+std::string ResultStore::InsertFit(const std::string& variant, const std::string& param,
+                                   const std::string& material, double value, double j_train, double j_validate,
+                                   const nlohmann::json& result) {
+  Statement s;
+  sqlite3_prepare_v2(db_,
+                     "INSERT OR REPLACE INTO fits (variant, param, material, value, j_train, j_validate, result) "
+                     "VALUES (?,?,?,?,?,?,?)",
+                     -1, &s.stmt, nullptr);
+  sqlite3_bind_text(s.stmt, 1, variant.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_text(s.stmt, 2, param.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_text(s.stmt, 3, material.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_double(s.stmt, 4, value);
+  sqlite3_bind_double(s.stmt, 5, j_train);
+  sqlite3_bind_double(s.stmt, 6, j_validate);
+  const std::string text = result.dump();
+  sqlite3_bind_text(s.stmt, 7, text.c_str(), -1, SQLITE_TRANSIENT);
+  // One statement is its own transaction in SQLite: the row is whole or absent.
+  return sqlite3_step(s.stmt) == SQLITE_DONE ? "" : sqlite3_errmsg(db_);
+}
+
+std::vector<nlohmann::json> ResultStore::Fits() {
+  std::vector<nlohmann::json> out;
+  Statement s;
+  sqlite3_prepare_v2(db_, "SELECT result FROM fits ORDER BY variant, param, material", -1, &s.stmt, nullptr);
+  while (sqlite3_step(s.stmt) == SQLITE_ROW)
+    out.push_back(nlohmann::json::parse(reinterpret_cast<const char*>(sqlite3_column_text(s.stmt, 0))));
+  return out;
 }
 
 std::string ResultStore::MergeFrom(const std::string& other_path) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,11 +36,19 @@ class ResultStore {
   bool Has(const std::string& id);
   std::string Insert(const JobResult& result);  // error message, empty on success
   std::vector<JobResult> All();
+  std::optional<JobResult> Get(const std::string& id);
+
+  // Fit results (table `fits`), one row per (variant, parameter, material) of
+  // a fit, replaced when the fit is run again; `result` is the fit's JSON.
+  std::string InsertFit(const std::string& variant, const std::string& param, const std::string& material,
+                        double value, double j_train, double j_validate, const nlohmann::json& result);
+  std::vector<nlohmann::json> Fits();
   // Copies every row of `other_path` not already here (by job id).
   std::string MergeFrom(const std::string& other_path);
 
  private:
   explicit ResultStore(sqlite3* db);
+  std::vector<JobResult> Select(const std::string& where, const std::string& id);
   std::string Exec(const std::string& sql);
   sqlite3* db_;
 };

@@ -1,0 +1,61 @@
+// `shimmer fit SPEC`: the spec's `fit` section: per material and variant the
+// parameter value that minimises the objective, validated on held-out shots,
+// written as fit.md / fit.json / J(p) plots and as rows of the store.
+#include <cstdio>
+#include <filesystem>
+
+#include "commands.h"
+#include "fit_report.h"
+#include "fit_run.h"
+#include "spec.h"
+
+namespace shimmer::cli {
+
+namespace {
+
+struct FitCliOptions {
+  std::string spec, db, work, out, device;
+  bool keep_frames = false;
+};
+
+void Run(const FitCliOptions& o) {
+  const experiments::SpecResult spec = experiments::LoadSpec(o.spec);
+  if (!spec.ok()) throw UsageError(spec.error);
+  if (spec.spec.fits.empty()) throw UsageError(o.spec + ": the spec has no \"fit\" section");
+  experiments::RunOptions ro;
+  StorePaths(spec.spec.name, o.db, o.work, "fit.db", &ro);
+  ro.keep_frames = o.keep_frames;
+  ro.device = o.device;
+  const experiments::FitOutcome outcome = experiments::RunFits(
+      spec.spec, ro, [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); });
+  if (!outcome.error.empty()) throw std::runtime_error(outcome.error);
+  for (const experiments::FitLaw& l : outcome.laws) {
+    std::printf("%s, %s materials: %s(alpha) = %.4g * alpha^%.4g; log residuals:", l.variant.c_str(), l.ndf.c_str(),
+                l.param.c_str(), l.law.a, l.law.b);
+    for (std::size_t i = 0; i < l.alpha.size(); ++i)
+      std::printf(" %s %+.3f", l.materials[i].c_str(), l.law.residuals[i]);
+    std::printf("\n");
+  }
+  const std::string out = o.out.empty() ? (std::filesystem::path("results") / spec.spec.name).string() : o.out;
+  std::vector<std::string> warnings;
+  if (std::string e = experiments::WriteFitReport(outcome, spec.spec, out, &warnings); !e.empty())
+    throw std::runtime_error(e);
+  for (const std::string& w : warnings) std::fprintf(stderr, "shimmer: warning: %s\n", w.c_str());
+  std::printf("fit: %s/fit.md (rows in %s)\n", out.c_str(), ro.db_path.c_str());
+}
+
+}  // namespace
+
+void AddFitCommand(CLI::App& app) {
+  auto o = std::make_shared<FitCliOptions>();
+  CLI::App* cmd = app.add_subcommand("fit", "Fit variant parameters per material (the spec's \"fit\" section)");
+  cmd->add_option("spec", o->spec, "Spec JSON file with a \"fit\" section")->required();
+  cmd->add_option("--db", o->db, "Store for evaluations and fitted rows (default runs/<spec name>/fit.db)");
+  cmd->add_option("--work", o->work, "Frame cache directory (default runs/<spec name>/frames)");
+  cmd->add_option("-o,--out", o->out, "Report directory (default results/<spec name>)");
+  cmd->add_flag("--keep-frames", o->keep_frames, "Keep rendered frames after measuring");
+  cmd->add_option("--device", o->device, "Vulkan device name substring");
+  cmd->callback([o] { Run(*o); });
+}
+
+}  // namespace shimmer::cli

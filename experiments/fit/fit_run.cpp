@@ -1,0 +1,237 @@
+#include "fit_run.h"
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "output_files.h"
+#include "result_store.h"
+#include "scene.h"
+
+namespace shimmer::experiments {
+
+namespace {
+
+double Ratio(double value, double none) {
+  if (none > 0) return value / none;
+  return value;  // nothing to normalise by: the unfiltered shot has no such error
+}
+
+double FlickerOf(const nlohmann::json& m) {
+  return m.contains("flicker") ? NumberOr(m["flicker"], "flicker_index") : std::nan("");
+}
+
+// Measures jobs through the store: a job measured before (this run or an
+// earlier one) is read back, not rendered.
+class CachedMeasure {
+ public:
+  CachedMeasure(ResultStore* store, const RunOptions& options) : store_(store), options_(options) {}
+
+  const nlohmann::json* Metrics(const Job& job) {
+    if (!error_.empty()) return nullptr;  // the fit stops at its first failure
+    const std::string id = JobId(job);
+    if (auto it = cache_.find(id); it != cache_.end()) return &it->second;
+    if (auto row = store_->Get(id)) return &(cache_[id] = row->metrics);
+    Measured m = MeasureJob(job, options_);
+    if (m.error.empty()) m.error = store_->Insert(m.result);
+    if (!m.error.empty()) {
+      if (error_.empty()) error_ = m.error;
+      return nullptr;
+    }
+    ++rendered_;
+    return &(cache_[id] = m.result.metrics);
+  }
+  const std::string& error() const { return error_; }
+  int rendered() const { return rendered_; }
+
+ private:
+  ResultStore* store_;
+  const RunOptions& options_;
+  std::map<std::string, nlohmann::json> cache_;
+  std::string error_;
+  int rendered_ = 0;
+};
+
+Job ShotJob(const Spec& spec, const std::string& scene, const std::string& camera, const std::string& material,
+            const std::string& variant, const std::map<std::string, double>& params, const std::string& derivatives) {
+  Job job;
+  job.scene = scene;
+  job.material = material;
+  job.camera = camera;
+  job.variant = variant;
+  job.params = params;
+  job.derivatives = derivatives;
+  job.width = spec.width;
+  job.height = spec.height;
+  job.frames = spec.frames;
+  job.fps = spec.fps;
+  job.reference = spec.reference;
+  job.metrics = spec.metrics;
+  return job;
+}
+
+struct Objective {
+  const Spec& spec;
+  const FitConfig& config;
+  const std::string& material;
+  const std::string& variant;
+  CachedMeasure& measure;
+
+  // NaN when a render or measurement failed (measure.error() says why).
+  ObjectiveValue operator()(double p, const ShotSet& shots) const {
+    ObjectiveValue value;
+    for (const std::string& scene : shots.scenes)
+      for (const std::string& camera : shots.cameras) {
+        const nlohmann::json* none =
+            measure.Metrics(ShotJob(spec, scene, camera, material, "none", {}, config.derivatives));
+        const nlohmann::json* test = measure.Metrics(
+            ShotJob(spec, scene, camera, material, variant, {{config.param, p}}, config.derivatives));
+        if (!none || !test) return {std::nan(""), {}};
+        ShotTerms t;
+        t.scene = scene;
+        t.camera = camera;
+        t.flicker = FlickerOf(*test);
+        t.flicker_none = FlickerOf(*none);
+        t.relmse = NumberOr(*test, "relmse");
+        t.relmse_none = NumberOr(*none, "relmse");
+        t.bias = NumberOr(*test, "energy_bias");
+        t.j = ShotObjective(config.weights, t);
+        value.shots.push_back(t);
+        value.j += t.j;
+      }
+    value.j /= double(value.shots.size());
+    return value;
+  }
+};
+
+nlohmann::json ToJson(const ObjectiveValue& v) {
+  nlohmann::json shots = nlohmann::json::array();
+  for (const ShotTerms& t : v.shots)
+    shots.push_back({{"scene", t.scene},
+                     {"camera", t.camera},
+                     {"flicker_index", t.flicker},
+                     {"flicker_index_none", t.flicker_none},
+                     {"relmse", t.relmse},
+                     {"relmse_none", t.relmse_none},
+                     {"energy_bias", t.bias},
+                     {"j", t.j}});
+  return {{"j", v.j}, {"shots", shots}};
+}
+
+}  // namespace
+
+double ShotObjective(const FitWeights& w, const ShotTerms& t) {
+  return w.flicker * Ratio(t.flicker, t.flicker_none) + w.spatial * Ratio(t.relmse, t.relmse_none) +
+         w.bias * t.bias * t.bias;
+}
+
+nlohmann::json MaterialFit::ToJson() const {
+  nlohmann::json samples = nlohmann::json::array();
+  for (const auto& [p, j] : search.samples) samples.push_back({p, j});
+  nlohmann::json defaults_json = nlohmann::json::array();
+  for (std::size_t i = 0; i < defaults.size(); ++i)
+    defaults_json.push_back({{"value", defaults[i]},
+                             {"train", experiments::ToJson(train_defaults[i])},
+                             {"validate", experiments::ToJson(validate_defaults[i])}});
+  return {{"variant", variant},
+          {"param", param},
+          {"material", material},
+          {"ndf", ndf},
+          {"alpha", alpha},
+          {"bounds", {lo, hi}},
+          {"value", search.best},
+          {"evaluations", search.evaluations},
+          {"ceres_improved", search.ceres_improved},
+          {"seconds", seconds},
+          {"samples", samples},
+          {"train", experiments::ToJson(train)},
+          {"validate", experiments::ToJson(validate)},
+          {"defaults", defaults_json}};
+}
+
+FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::function<void(const std::string&)>& log) {
+  FitOutcome outcome;
+  if (spec.fits.empty()) {
+    outcome.error = "the spec has no \"fit\" section";
+    return outcome;
+  }
+  auto [store, error] = ResultStore::Open(options.db_path);
+  if (!store) {
+    outcome.error = error;
+    return outcome;
+  }
+  CachedMeasure measure(store.get(), options);
+  for (const FitConfig& config : spec.fits)
+    for (const std::string& variant : config.variants) {
+      for (const std::string& material : spec.materials) {
+        const auto t0 = std::chrono::steady_clock::now();
+        const shading::MaterialDesc desc = scene::ParseMaterial(material, {}).value;
+        Objective objective{spec, config, material, variant, measure};
+        MaterialFit fit;
+        fit.variant = variant;
+        fit.param = config.param;
+        fit.material = material;
+        fit.ndf = desc.ndf == shading::Ndf::kGgx ? "ggx" : "beckmann";
+        fit.alpha = std::sqrt(desc.alpha.x * desc.alpha.y);
+        fit.lo = config.lo;
+        fit.hi = config.hi;
+        fit.defaults = config.defaults;
+        const int rendered_before = measure.rendered();
+        // The defaults are not offered to the search: that they lose to the
+        // fitted value is a finding, not a construction.
+        fit.search = Minimize1D([&](double p) { return objective(p, config.train).j; }, config.lo, config.hi,
+                                config.sweep_points);
+        if (!measure.error().empty()) {
+          outcome.error = variant + " on " + material + ": " + measure.error();
+          return outcome;
+        }
+        fit.train = objective(fit.search.best, config.train);
+        fit.validate = objective(fit.search.best, config.validate);
+        for (double d : config.defaults) {
+          fit.train_defaults.push_back(objective(d, config.train));
+          fit.validate_defaults.push_back(objective(d, config.validate));
+        }
+        if (!measure.error().empty()) {
+          outcome.error = variant + " on " + material + ": " + measure.error();
+          return outcome;
+        }
+        fit.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (std::string e = store->InsertFit(variant, config.param, material, fit.search.best, fit.train.j,
+                                            fit.validate.j, fit.ToJson());
+            !e.empty()) {
+          outcome.error = options.db_path + ": " + e;
+          return outcome;
+        }
+        if (log) {
+          char line[256];
+          std::snprintf(line, sizeof line,
+                        "%s %s=%.4g on %s: J_train %.4g, J_validate %.4g (%d evaluations, %d renders, %.0f s)",
+                        variant.c_str(), config.param.c_str(), fit.search.best, material.c_str(), fit.train.j,
+                        fit.validate.j, fit.search.evaluations, measure.rendered() - rendered_before, fit.seconds);
+          log(line);
+        }
+        outcome.fits.push_back(std::move(fit));
+      }
+    }
+
+  // value(alpha) per (variant, param, NDF), across materials.
+  std::map<std::tuple<std::string, std::string, std::string>, FitLaw> laws;
+  for (const MaterialFit& f : outcome.fits) {
+    FitLaw& law = laws[{f.variant, f.param, f.ndf}];
+    law.variant = f.variant;
+    law.param = f.param;
+    law.ndf = f.ndf;
+    law.materials.push_back(f.material);
+    law.alpha.push_back(f.alpha);
+    law.value.push_back(f.search.best);
+  }
+  for (auto& [key, law] : laws) {
+    if (std::set<double>(law.alpha.begin(), law.alpha.end()).size() < 2) continue;  // a curve needs two alphas
+    law.law = FitPowerLaw(law.alpha, law.value);
+    outcome.laws.push_back(std::move(law));
+  }
+  return outcome;
+}
+
+}  // namespace shimmer::experiments

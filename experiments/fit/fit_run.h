@@ -1,0 +1,75 @@
+// The fitting stage on rendered objectives: for each material and variant of
+// a spec's `fit` section, the parameter value minimising J on the training
+// shots, validated on held-out shots against the published defaults, and a
+// closed form value(alpha) per variant and NDF across materials.
+//
+// J(p) = mean over shots of  w_f F(p)/F(none) + w_s E(p)/E(none) + w_b b(p)^2
+// with F the flicker_index of the error sequence, E the spatial relmse and b
+// the signed energy_bias (already a fraction of the reference's energy). The
+// first two are ratios to the unfiltered render of the same shot, so 1 means
+// "as bad as doing nothing" on every material and scene, and the weights
+// trade comparable numbers.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "fit.h"
+#include "runner.h"
+#include "spec.h"
+
+namespace shimmer::experiments {
+
+// One shot's part of J, with its raw terms.
+struct ShotTerms {
+  std::string scene, camera;
+  double flicker = 0, flicker_none = 0;
+  double relmse = 0, relmse_none = 0;
+  double bias = 0;
+  double j = 0;
+};
+
+// w_f F/F_none + w_s E/E_none + w_b b^2; a term whose `none` value is 0 counts
+// 0 when the variant is 0 too and its raw value otherwise.
+double ShotObjective(const FitWeights& w, const ShotTerms& t);
+
+struct ObjectiveValue {
+  double j = 0;  // mean of the shots' j
+  std::vector<ShotTerms> shots;
+};
+
+struct MaterialFit {
+  std::string variant, param, material, ndf;
+  double alpha = 0;  // sqrt(alpha_x alpha_y)
+  double lo = 0, hi = 0;
+  Fit1D search;      // every evaluation of J on the training shots
+  double seconds = 0;
+  ObjectiveValue train, validate;  // at the fitted value
+  std::vector<double> defaults;
+  std::vector<ObjectiveValue> train_defaults, validate_defaults;
+  nlohmann::json ToJson() const;
+};
+
+struct FitLaw {
+  std::string variant, param, ndf;
+  std::vector<std::string> materials;
+  std::vector<double> alpha, value;
+  PowerLaw law;
+};
+
+struct FitOutcome {
+  std::vector<MaterialFit> fits;
+  std::vector<FitLaw> laws;
+  std::string error;  // empty when every fit finished
+};
+
+// Runs every fit of the spec. Evaluations are jobs: cached in the store at
+// options.db_path by job id (a rerun re-renders nothing) and their
+// references in options.work_dir; fitted rows go to the store's `fits` table.
+FitOutcome RunFits(const Spec& spec, const RunOptions& options,
+                   const std::function<void(const std::string&)>& log = {});
+
+}  // namespace shimmer::experiments

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "fit.h"
+#include "fit_run.h"
 
 namespace shimmer::experiments {
 namespace {
@@ -45,6 +46,22 @@ TEST(Fit, OptimumAtTheBoundIsFound) {
   auto j = [](double p) { return p; };  // decreasing towards lo
   const Fit1D fit = Minimize1D(j, 0.05, 2, 6);
   EXPECT_NEAR(fit.best, 0.05, 1e-9);
+}
+
+TEST(Fit, ShotObjectiveIsNormalisedByTheUnfilteredShot) {
+  ShotTerms t;
+  t.flicker = 2e-6, t.flicker_none = 8e-6;  // a quarter of the flicker
+  t.relmse = 0.3, t.relmse_none = 0.2;      // half again the spatial error
+  t.bias = -0.2;
+  EXPECT_NEAR(ShotObjective({1, 1, 1}, t), 0.25 + 1.5 + 0.04, 1e-12);
+  EXPECT_NEAR(ShotObjective({2, 0, 10}, t), 0.5 + 0.4, 1e-12);
+  // The same shot at a thousand times the brightness scores the same.
+  ShotTerms bright = t;
+  bright.flicker *= 1e6, bright.flicker_none *= 1e6;
+  EXPECT_NEAR(ShotObjective({1, 1, 1}, bright), ShotObjective({1, 1, 1}, t), 1e-12);
+  // Nothing to normalise by: the raw value counts.
+  t.flicker_none = 0;
+  EXPECT_NEAR(ShotObjective({1, 0, 0}, t), 2e-6, 1e-18);
 }
 
 TEST(Fit, PowerLawRecoversKnownCurveDespiteAnOutlier) {

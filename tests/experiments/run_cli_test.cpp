@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -126,6 +127,62 @@ TEST(RunCli, MalformedSpecIsRejectedBeforeAnyWork) {
   std::ifstream out(ws.dir / "out.txt");
   std::string text((std::istreambuf_iterator<char>(out)), {});
   EXPECT_NE(text.find("bad.json:6: nope: unknown variant"), std::string::npos) << text;
+  EXPECT_FALSE(fs::exists(ws.dir / "runs"));
+}
+
+// A tiny real configuration: the fitted fp_max beats both published defaults
+// on its own (training) objective, which the search was not shown.
+TEST(FitCli, FittedValueBeatsBothDefaultsOnItsObjective) {
+  Workspace ws;
+  std::ofstream(ws.dir / "fit.json") << R"({
+    "name": "tinyfit",
+    "scenes": ["sphere-field"],
+    "materials": ["ggx:0.02"],
+    "cameras": ["orbit"],
+    "variants": ["none"],
+    "size": [32, 32],
+    "frames": 6,
+    "reference": {"spp": 3},
+    "fit": {
+      "variants": ["k16-beckmann-rect"], "param": "fp_max", "bounds": [0.01, 4], "sweep_points": 9,
+      "train": {"scenes": ["sphere-field"], "cameras": ["orbit"]},
+      "validate": {"scenes": ["sphere-field"], "cameras": ["pan"]}
+    }
+  })";
+  ASSERT_EQ(std::system(("cd " + ws.dir.string() + " && " + SHIMMER_EXE +
+                         " fit fit.json --db fit.db --work frames -o report >>log.txt 2>&1")
+                            .c_str()),
+            0);
+  std::ifstream in(ws.dir / "report" / "fit.json");
+  const nlohmann::json report = nlohmann::json::parse(in);
+  ASSERT_EQ(report["fits"].size(), 1u);
+  const nlohmann::json& fit = report["fits"][0];
+  const double j = fit["train"]["j"];
+  ASSERT_EQ(fit["defaults"].size(), 2u);
+  for (const nlohmann::json& d : fit["defaults"]) {
+    EXPECT_LT(j, d["train"]["j"].get<double>()) << "fp_max = " << fit["value"] << " against the default " << d["value"];
+    EXPECT_TRUE(std::isfinite(d["validate"]["j"].get<double>()));
+  }
+  EXPECT_GT(fit["evaluations"].get<int>(), 5);  // the sweep and then Ceres
+  EXPECT_TRUE(fs::exists(ws.dir / "report" / "fit.md"));
+  auto [store, error] = ResultStore::Open((ws.dir / "fit.db").string());
+  ASSERT_TRUE(store) << error;
+  const auto rows = store->Fits();
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0]["value"], fit["value"]);
+}
+
+TEST(FitCli, BadFitConfigurationIsRejectedBeforeAnyWork) {
+  Workspace ws;
+  std::ofstream(ws.dir / "bad.json") << R"({"name": "b", "scenes": ["sphere"], "materials": ["ggx:0.1"],
+    "cameras": ["orbit"], "variants": ["none"],
+    "fit": {"variants": ["tk21"], "param": "fp_max", "train": {"scenes": ["sphere"], "cameras": ["orbit"]},
+            "validate": {"scenes": ["sphere"], "cameras": ["pan"]}}})";
+  const int rc = std::system(("cd " + ws.dir.string() + " && " + SHIMMER_EXE + " fit bad.json >out.txt 2>&1").c_str());
+  EXPECT_EQ(WEXITSTATUS(rc), 2);
+  std::ifstream out(ws.dir / "out.txt");
+  std::string text((std::istreambuf_iterator<char>(out)), {});
+  EXPECT_NE(text.find("tk21: has no parameter \"fp_max\" to fit"), std::string::npos) << text;
   EXPECT_FALSE(fs::exists(ws.dir / "runs"));
 }
 

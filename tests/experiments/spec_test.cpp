@@ -127,6 +127,60 @@ TEST(Spec, MalformedSpecsNameTheKeyAndLine) {
   EXPECT_NE(e.find("spin: unknown camera path"), std::string::npos) << e;
 }
 
+std::string FitSpec(const std::string& materials, const std::string& fit) {
+  return "{\n  \"name\": \"f\",\n  \"scenes\": [\"sphere\"],\n  \"materials\": " + materials +
+         ",\n  \"cameras\": [\"orbit\"],\n  \"variants\": [\"none\"],\n  \"fit\": " + fit + "\n}";
+}
+const std::string kShots = R"("train": {"scenes": ["sphere"], "cameras": ["orbit"]},
+  "validate": {"scenes": ["wires"], "cameras": ["dolly"]})";
+
+TEST(Spec, FitSectionParses) {
+  SpecResult r = ParseSpec(FitSpec(R"(["ggx:0.02", "beckmann:0.1"])",
+                                   R"([{"variants": ["k16-beckmann-rect"], "param": "fp_max", "bounds": [0.05, 2],
+  "sweep_points": 5, "weights": {"bias": 4}, )" + kShots + R"(},
+  {"variants": ["tk19"], "param": "kappa", )" + kShots + "}]"),
+                           "f.json");
+  ASSERT_TRUE(r.ok()) << r.error;
+  ASSERT_EQ(r.spec.fits.size(), 2u);
+  const FitConfig& c = r.spec.fits[0];
+  EXPECT_EQ(c.param, "fp_max");
+  EXPECT_DOUBLE_EQ(c.lo, 0.05);
+  EXPECT_DOUBLE_EQ(c.hi, 2);
+  EXPECT_EQ(c.sweep_points, 5);
+  EXPECT_DOUBLE_EQ(c.weights.bias, 4);
+  EXPECT_DOUBLE_EQ(c.weights.flicker, 1);
+  EXPECT_EQ(c.validate.scenes, std::vector<std::string>{"wires"});
+  EXPECT_EQ((std::vector<double>{1.0, 0.7}), c.defaults);
+  EXPECT_EQ(r.spec.fits[1].param, "kappa");
+}
+
+TEST(Spec, BadFitConfigurationsAreRejectedUpFront) {
+  auto error = [](const std::string& materials, const std::string& fit) {
+    return ParseSpec(FitSpec(materials, fit), "f.json").error;
+  };
+  const std::string ggx = R"(["ggx:0.02"])";
+  std::string e = error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "bounds": [2, 2], )" + kShots + "}");
+  EXPECT_NE(e.find("bounds: are empty"), std::string::npos) << e;
+  e = error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "bounds": [0, 1], )" + kShots + "}");
+  EXPECT_NE(e.find("bounds: are empty or not positive"), std::string::npos) << e;
+  e = error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_mux", )" + kShots + "}");
+  EXPECT_NE(e.find("k16-beckmann-rect: has no parameter \"fp_mux\" to fit (its parameters: fp_max)"),
+            std::string::npos)
+      << e;
+  e = error(ggx, R"({"variants": ["tk19"], "param": "fp_max", )" + kShots + "}");
+  EXPECT_NE(e.find("tk19: has no parameter \"fp_max\""), std::string::npos) << e;
+  e = error(ggx, R"({"variants": ["vlachos15"], "param": "fp_max", )" + kShots + "}");
+  EXPECT_NE(e.find("(its parameters: none)"), std::string::npos) << e;
+  e = error(R"(["beckmann:0.1"])", R"({"variants": ["k16-ggx-rect-stable"], "param": "fp_max", )" + kShots + "}");
+  EXPECT_NE(e.find("takes GGX materials only"), std::string::npos) << e;
+  e = error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "train": {"scenes": ["sphere"], "cameras": ["orbit"]}})");
+  EXPECT_NE(e.find("needs \"validate\""), std::string::npos) << e;
+  e = error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "weights": {"flicker": 0, "spatial": 0, "bias": 0}, )" + kShots + "}");
+  EXPECT_NE(e.find("weights: must be non-negative and not all zero"), std::string::npos) << e;
+  e = error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "validate": {"scenes": ["sphere"], "cameras": ["spin"]}, "train": {"scenes": ["sphere"], "cameras": ["orbit"]}})");
+  EXPECT_NE(e.find("spin: unknown camera path"), std::string::npos) << e;
+}
+
 }  // namespace
 }  // namespace shimmer::experiments
 

@@ -1,6 +1,5 @@
 #include "fit_run.h"
 
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <set>
@@ -32,7 +31,10 @@ class CachedMeasure {
     if (!error_.empty()) return nullptr;  // the fit stops at its first failure
     const std::string id = JobId(job);
     if (auto it = cache_.find(id); it != cache_.end()) return &it->second;
-    if (auto row = store_->Get(id)) return &(cache_[id] = row->metrics);
+    if (auto row = store_->Get(id)) {
+      wall_s_[id] = row->wall_s;
+      return &(cache_[id] = row->metrics);
+    }
     Measured m = MeasureJob(job, options_);
     if (m.error.empty()) m.error = store_->Insert(m.result);
     if (!m.error.empty()) {
@@ -40,7 +42,13 @@ class CachedMeasure {
       return nullptr;
     }
     ++rendered_;
+    wall_s_[id] = m.result.wall_s;
     return &(cache_[id] = m.result.metrics);
+  }
+  // Render-and-measure seconds of a job, as recorded when it was computed.
+  double WallSeconds(const std::string& id) const {
+    auto it = wall_s_.find(id);
+    return it == wall_s_.end() ? 0.0 : it->second;
   }
   const std::string& error() const { return error_; }
   int rendered() const { return rendered_; }
@@ -49,27 +57,10 @@ class CachedMeasure {
   ResultStore* store_;
   const RunOptions& options_;
   std::map<std::string, nlohmann::json> cache_;
+  std::map<std::string, double> wall_s_;
   std::string error_;
   int rendered_ = 0;
 };
-
-Job ShotJob(const Spec& spec, const std::string& scene, const std::string& camera, const std::string& material,
-            const std::string& variant, const std::map<std::string, double>& params, const std::string& derivatives) {
-  Job job;
-  job.scene = scene;
-  job.material = material;
-  job.camera = camera;
-  job.variant = variant;
-  job.params = params;
-  job.derivatives = derivatives;
-  job.width = spec.width;
-  job.height = spec.height;
-  job.frames = spec.frames;
-  job.fps = spec.fps;
-  job.reference = spec.reference;
-  job.metrics = spec.metrics;
-  return job;
-}
 
 struct Objective {
   const Spec& spec;
@@ -77,16 +68,19 @@ struct Objective {
   const std::string& material;
   const std::string& variant;
   CachedMeasure& measure;
+  std::set<std::string>* used;  // ids of every job this fit consulted
 
   // NaN when a render or measurement failed (measure.error() says why).
   ObjectiveValue operator()(double p, const ShotSet& shots) const {
     ObjectiveValue value;
     for (const std::string& scene : shots.scenes)
       for (const std::string& camera : shots.cameras) {
-        const nlohmann::json* none =
-            measure.Metrics(ShotJob(spec, scene, camera, material, "none", {}, config.derivatives));
-        const nlohmann::json* test = measure.Metrics(
-            ShotJob(spec, scene, camera, material, variant, {{config.param, p}}, config.derivatives));
+        const Job none_job = SpecJob(spec, scene, material, camera, "none", {}, config.derivatives);
+        const Job test_job = SpecJob(spec, scene, material, camera, variant, {{config.param, p}}, config.derivatives);
+        const nlohmann::json* none = measure.Metrics(none_job);
+        const nlohmann::json* test = measure.Metrics(test_job);
+        used->insert(JobId(none_job));
+        used->insert(JobId(test_job));
         if (!none || !test) return {std::nan(""), {}};
         ShotTerms t;
         t.scene = scene;
@@ -165,9 +159,9 @@ FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::funct
   for (const FitConfig& config : spec.fits)
     for (const std::string& variant : config.variants) {
       for (const std::string& material : spec.materials) {
-        const auto t0 = std::chrono::steady_clock::now();
         const shading::MaterialDesc desc = scene::ParseMaterial(material, {}).value;
-        Objective objective{spec, config, material, variant, measure};
+        std::set<std::string> used;
+        Objective objective{spec, config, material, variant, measure, &used};
         MaterialFit fit;
         fit.variant = variant;
         fit.param = config.param;
@@ -196,7 +190,9 @@ FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::funct
           outcome.error = variant + " on " + material + ": " + measure.error();
           return outcome;
         }
-        fit.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        // The cost of the evaluations as recorded when each was computed, so
+        // a rerun served from the cache reports the same time.
+        for (const std::string& id : used) fit.seconds += measure.WallSeconds(id);
         if (std::string e = store->InsertFit(variant, config.param, material, fit.search.best, fit.train.j,
                                             fit.validate.j, fit.ToJson());
             !e.empty()) {

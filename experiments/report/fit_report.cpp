@@ -75,7 +75,7 @@ std::string WriteFitReport(const FitOutcome& outcome, const Spec& spec, const st
     md << "## " << first.variant << ": " << first.param << "\n\n![J(p)](" << slug << ".svg)\n\n"
        << "| material | α | fitted " << first.param << " | J train | J validate |";
     for (double d : first.defaults) md << " J train at " << d << " | J validate at " << d << " |";
-    md << " evaluations | seconds |\n|---|---|---|---|---|";
+    md << " evaluations | render s |\n|---|---|---|---|---|";
     for (std::size_t i = 0; i < first.defaults.size(); ++i) md << "---|---|";
     md << "---|---|\n";
     std::ostringstream data, plot;

@@ -57,6 +57,24 @@ std::vector<std::map<std::string, double>> ParameterGrid(const std::map<std::str
 
 }  // namespace
 
+Job SpecJob(const Spec& spec, const std::string& scene, const std::string& material, const std::string& camera,
+            const std::string& variant, const std::map<std::string, double>& params, const std::string& derivatives) {
+  Job job;
+  job.scene = scene;
+  job.material = material;
+  job.camera = camera;
+  job.variant = variant;
+  job.params = params;
+  job.derivatives = derivatives;
+  job.width = spec.width;
+  job.height = spec.height;
+  job.frames = spec.frames;
+  job.fps = spec.fps;
+  job.reference = spec.reference;
+  job.metrics = spec.metrics;
+  return job;
+}
+
 bool ReadsDerivatives(const std::string& variant) {
   return variant != "none" && variant.rfind("supersample-", 0) != 0;
 }
@@ -70,20 +88,7 @@ std::vector<Job> ExpandJobs(const Spec& spec) {
           for (const auto& params : ParameterGrid(variant.params))
             for (const std::string& derivatives : spec.derivatives) {
               if (!ReadsDerivatives(variant.name) && derivatives != spec.derivatives.front()) continue;
-              Job job;
-              job.scene = scene;
-              job.material = material;
-              job.camera = camera;
-              job.variant = variant.name;
-              job.params = params;
-              job.derivatives = derivatives;
-              job.width = spec.width;
-              job.height = spec.height;
-              job.frames = spec.frames;
-              job.fps = spec.fps;
-              job.reference = spec.reference;
-              job.metrics = spec.metrics;
-              jobs.push_back(std::move(job));
+              jobs.push_back(SpecJob(spec, scene, material, camera, variant.name, params, derivatives));
             }
   return jobs;
 }

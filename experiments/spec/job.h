@@ -30,6 +30,10 @@ struct Job {
   static Job FromJson(const nlohmann::json& j);
 };
 
+// One job of the spec's resolution, frames, reference and metric options.
+Job SpecJob(const Spec& spec, const std::string& scene, const std::string& material, const std::string& camera,
+            const std::string& variant, const std::map<std::string, double>& params, const std::string& derivatives);
+
 // False for `none` and `supersample-N`: their pixels never read the
 // derivatives, so one derivative source stands for all.
 bool ReadsDerivatives(const std::string& variant);

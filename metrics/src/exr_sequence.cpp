@@ -173,10 +173,14 @@ Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& re
     }
     fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
     if (j.contains("frames")) {
-      if (!j["frames"].is_array()) return R::Failure(path.string() + ": \"frames\" must be an array of file names");
+      // File names, or objects with a "file" (shimmer's renderer adds gpu_ms and time_s).
+      const std::string shape = ": \"frames\" must be an array of file names or of {\"file\": name} objects";
+      if (!j["frames"].is_array()) return R::Failure(path.string() + shape);
       for (const auto& f : j["frames"]) {
-        if (!f.is_string()) return R::Failure(path.string() + ": \"frames\" must be an array of file names");
-        seq.frames.push_back(dir / f.get<std::string>());
+        const nlohmann::json* name = &f;
+        if (f.is_object() && f.contains("file")) name = &f["file"];
+        if (!name->is_string()) return R::Failure(path.string() + shape);
+        seq.frames.push_back(dir / name->get<std::string>());
       }
     } else {
       auto files = ListExrFiles(dir);

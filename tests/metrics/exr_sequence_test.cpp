@@ -152,6 +152,23 @@ TEST(ExrSequence, SequenceJsonGivesFpsAndFrameList) {
   EXPECT_EQ(by_dir->frames.size(), 4u);
 }
 
+// The shape shimmer's renderer writes: one object per frame.
+TEST(ExrSequence, SequenceJsonFramesMayBeObjectsWithAFile) {
+  TempDir dir;
+  WriteSequence(dir.path(), Ramp(Layout::kBeautyRgb, 3));
+  std::ofstream(dir / "sequence.json")
+      << R"({"fps": 30, "frames": [{"file": "frame_0000.exr", "gpu_ms": 1.5, "time_s": 0},
+                                   {"file": "frame_0001.exr", "gpu_ms": 1.4, "time_s": 0.033}]})";
+  auto seq = OpenSequence(dir / "sequence.json", {});
+  ASSERT_TRUE(seq) << seq.error();
+  ASSERT_EQ(seq->frames.size(), 2u);
+  EXPECT_EQ(seq->frames[1].filename(), "frame_0001.exr");
+  std::ofstream(dir / "sequence.json") << R"({"frames": [{"gpu_ms": 1.5}]})";
+  auto bad = OpenSequence(dir / "sequence.json", {});
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().find("\"frames\" must be an array of file names"), std::string::npos) << bad.error();
+}
+
 TEST(ExrSequence, FpsOptionWhenNoSidecar) {
   TempDir dir;
   WriteSequence(dir.path(), Ramp(Layout::kBeautyRgb, 2));

@@ -74,13 +74,15 @@ void Run(const SweepOptions& o) {
     experiments::Measured m = experiments::MeasureJob(job, ro);
     if (!m.error.empty()) throw std::runtime_error(m.error);
     const auto& j = m.result.metrics;
-    const double fi = j.contains("flicker") ? experiments::NumberOr(j["flicker"], "flicker_index") : std::nan("");
+    const double fi = experiments::FlickerIndex(j);
+    const double tv_ratio = experiments::Metric(j, "tv_ratio"), tv_err = experiments::Metric(j, "tv_err");
+    const double bias = experiments::Metric(j, "energy_bias"), relmse = experiments::Metric(j, "relmse");
     const double v = job.params.at(name);
-    std::printf("%12.5g %10.4g %10.4g %12.4g %10.4g %13.4g %12.3f\n", v, experiments::NumberOr(j, "tv_ratio"), experiments::NumberOr(j, "tv_err"),
-                experiments::NumberOr(j, "energy_bias"), experiments::NumberOr(j, "relmse"), fi, m.result.gpu_ms_per_frame);
+    std::printf("%12.5g %10.4g %10.4g %12.4g %10.4g %13.4g %12.3f\n", v, tv_ratio, tv_err, bias, relmse, fi,
+                m.result.gpu_ms_per_frame);
     std::fflush(stdout);
-    csv << v << "," << experiments::NumberOr(j, "tv_ratio") << "," << experiments::NumberOr(j, "tv_err") << "," << experiments::NumberOr(j, "energy_bias") << ","
-        << experiments::NumberOr(j, "relmse") << "," << fi << "," << m.result.gpu_ms_per_frame << "\n";
+    csv << v << "," << tv_ratio << "," << tv_err << "," << bias << "," << relmse << "," << fi << ","
+        << m.result.gpu_ms_per_frame << "\n";
   }
   if (o.csv.empty()) return;
   const std::filesystem::path path(o.csv);

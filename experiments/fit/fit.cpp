@@ -100,15 +100,12 @@ Fit1D Minimize1D(const std::function<double(double)>& objective, double lo, doub
     options.logging_type = ceres::SILENT;
     ceres::Solver::Summary summary;
     ceres::Solve(options, &problem, &summary);
-    if (const double v = j(u); v < fit.objective) {
-      fit.best = std::exp(u);
-      fit.objective = v;
-      fit.ceres_improved = true;
-    }
+    j(u);  // Ceres' answer joins the samples
   }
-  // Every sample is a candidate: Ceres' difference points may be the lowest.
+  // Every sample is a candidate (Ceres' difference points may be the lowest);
+  // any lower than the sweep's best came from the refinement.
   for (const auto& [p, v] : fit.samples)
-    if (v < fit.objective) fit.best = p, fit.objective = v;
+    if (v < fit.objective) fit.best = p, fit.objective = v, fit.ceres_improved = true;
   return fit;
 }
 

@@ -17,19 +17,14 @@ double Ratio(double value, double none) {
   return value;  // nothing to normalise by: the unfiltered shot has no such error
 }
 
-double FlickerOf(const nlohmann::json& m) {
-  return m.contains("flicker") ? NumberOr(m["flicker"], "flicker_index") : std::nan("");
-}
-
 // Measures jobs through the store: a job measured before (this run or an
 // earlier one) is read back, not rendered.
 class CachedMeasure {
  public:
   CachedMeasure(ResultStore* store, const RunOptions& options) : store_(store), options_(options) {}
 
-  const nlohmann::json* Metrics(const Job& job) {
+  const nlohmann::json* Metrics(const Job& job, const std::string& id) {
     if (!error_.empty()) return nullptr;  // the fit stops at its first failure
-    const std::string id = JobId(job);
     if (auto it = cache_.find(id); it != cache_.end()) return &it->second;
     if (auto row = store_->Get(id)) {
       wall_s_[id] = row->wall_s;
@@ -77,19 +72,20 @@ struct Objective {
       for (const std::string& camera : shots.cameras) {
         const Job none_job = SpecJob(spec, scene, material, camera, "none", {}, config.derivatives);
         const Job test_job = SpecJob(spec, scene, material, camera, variant, {{config.param, p}}, config.derivatives);
-        const nlohmann::json* none = measure.Metrics(none_job);
-        const nlohmann::json* test = measure.Metrics(test_job);
-        used->insert(JobId(none_job));
-        used->insert(JobId(test_job));
+        const std::string none_id = JobId(none_job), test_id = JobId(test_job);
+        used->insert(none_id);
+        used->insert(test_id);
+        const nlohmann::json* none = measure.Metrics(none_job, none_id);
+        const nlohmann::json* test = measure.Metrics(test_job, test_id);
         if (!none || !test) return {std::nan(""), {}};
         ShotTerms t;
         t.scene = scene;
         t.camera = camera;
-        t.flicker = FlickerOf(*test);
-        t.flicker_none = FlickerOf(*none);
-        t.relmse = NumberOr(*test, "relmse");
-        t.relmse_none = NumberOr(*none, "relmse");
-        t.bias = NumberOr(*test, "energy_bias");
+        t.flicker = FlickerIndex(*test);
+        t.flicker_none = FlickerIndex(*none);
+        t.relmse = Metric(*test, "relmse");
+        t.relmse_none = Metric(*none, "relmse");
+        t.bias = Metric(*test, "energy_bias");
         t.j = ShotObjective(config.weights, t);
         value.shots.push_back(t);
         value.j += t.j;
@@ -174,12 +170,9 @@ FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::funct
         const int rendered_before = measure.rendered();
         // The defaults are not offered to the search: that they lose to the
         // fitted value is a finding, not a construction.
+        // After a failure every J is NaN at no cost, so one check below suffices.
         fit.search = Minimize1D([&](double p) { return objective(p, config.train).j; }, config.lo, config.hi,
                                 config.sweep_points);
-        if (!measure.error().empty()) {
-          outcome.error = variant + " on " + material + ": " + measure.error();
-          return outcome;
-        }
         fit.train = objective(fit.search.best, config.train);
         fit.validate = objective(fit.search.best, config.validate);
         for (double d : config.defaults) {

@@ -34,10 +34,6 @@ std::string FormatNumber(double v, const char* format) {
   return buf;
 }
 
-double NumberOr(const nlohmann::json& j, const char* key) {
-  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : std::nan("");
-}
-
 void RunGnuplot(const fs::path& dir, const std::vector<std::string>& scripts, std::vector<std::string>* warnings) {
   const std::string where = dir.empty() ? std::string(".") : dir.string();
   for (const std::string& s : scripts) {

@@ -7,8 +7,6 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 namespace shimmer::experiments {
 
 // Writes `text` to `path` via `path.tmp` and a rename; returns an error message, empty on success.
@@ -19,9 +17,6 @@ std::string Slug(const std::string& s);
 
 // printf-style, with "–" for NaN.
 std::string FormatNumber(double v, const char* format = "%.4g");
-
-// j[key] as a number, NaN when absent or not a number.
-double NumberOr(const nlohmann::json& j, const char* key);
 
 // Runs each script with gnuplot inside `dir`; a failure (or no gnuplot) adds
 // a warning naming the script, whose data stay ready to plot.

@@ -16,10 +16,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-double Num(const nlohmann::json& j, const char* key) { return NumberOr(j, key); }
-double FlickerIndex(const nlohmann::json& m) {
-  return m.contains("flicker") ? Num(m["flicker"], "flicker_index") : std::nan("");
-}
+double Num(const nlohmann::json& j, const char* key) { return Metric(j, key); }
 
 std::string Label(const JobResult& r) {
   std::string label = r.job.variant;

@@ -39,11 +39,15 @@ struct Statement {
   ~Statement() { sqlite3_finalize(stmt); }
 };
 
-double NumberOr(const nlohmann::json& j, const char* key) {
-  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : std::nan("");
+}  // namespace
+
+double Metric(const nlohmann::json& metrics, const char* key) {
+  return metrics.contains(key) && metrics[key].is_number() ? metrics[key].get<double>() : std::nan("");
 }
 
-}  // namespace
+double FlickerIndex(const nlohmann::json& metrics) {
+  return metrics.contains("flicker") ? Metric(metrics["flicker"], "flicker_index") : std::nan("");
+}
 
 ResultStore::ResultStore(sqlite3* db) : db_(db) {}
 ResultStore::~ResultStore() { sqlite3_close(db_); }
@@ -113,8 +117,8 @@ std::string ResultStore::Insert(const JobResult& r) {
   real(r.job.fps);
   sqlite3_bind_int(s.stmt, i++, r.job.reference.spp);
   real(r.job.reference.tolerance);
-  for (const char* key : {"tv_ratio", "tv_err", "energy_bias", "temporal_diff_err", "relmse"}) real(NumberOr(r.metrics, key));
-  real(r.metrics.contains("flicker") ? NumberOr(r.metrics["flicker"], "flicker_index") : std::nan(""));
+  for (const char* key : {"tv_ratio", "tv_err", "energy_bias", "temporal_diff_err", "relmse"}) real(Metric(r.metrics, key));
+  real(FlickerIndex(r.metrics));
   text(r.metrics.dump());
   text(r.job.ToJson().dump());
   real(r.gpu_ms_per_frame);

@@ -27,6 +27,11 @@ struct JobResult {
   std::string core_version;
 };
 
+// A metric of the metrics library's JSON (e.g. "tv_err"), NaN when absent
+// or not a number; FlickerIndex reads flicker.flicker_index.
+double Metric(const nlohmann::json& metrics, const char* key);
+double FlickerIndex(const nlohmann::json& metrics);
+
 class ResultStore {
  public:
   // Opens or creates the store; the error names the file and the cause.

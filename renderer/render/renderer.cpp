@@ -262,27 +262,25 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
     return Out{nullptr, "device '" + dev.name +
                             "' has no subgroup quad operations in compute shaders; use --derivatives analytic"};
 
-  const std::int32_t spec[] = {variant.id, static_cast<std::int32_t>(settings.derivatives), variant.spp_n};
+  const std::int32_t spec[] = {variant.id, static_cast<std::int32_t>(settings.derivatives), variant.spp_n,
+                               scene::SceneFeatures(settings.scene)};
   auto t1 = Clock::now();
-  auto pipe = im.ctx->CreatePipeline(spirv, spec, 4, sizeof(GpuPush));
+  using vk::BufferKind;
+  const BufferKind kinds[] = {BufferKind::kUniform, BufferKind::kStorage, BufferKind::kStorage, BufferKind::kStorage};
+  auto pipe = im.ctx->CreatePipeline(spirv, spec, kinds, sizeof(GpuPush));
   if (!pipe) return Out{nullptr, pipe.error};
   im.pipeline = std::move(pipe.value);
   im.timings.pipeline_ms = MsSince(t1);
 
   im.words = scene::PackScene(settings.scene);
   const std::size_t pixels = std::size_t(settings.width) * settings.height;
-  auto make = [&im](std::size_t bytes, std::unique_ptr<vk::Buffer>* out) {
-    auto b = im.ctx->CreateBuffer(bytes);
-    if (!b) return b.error;
-    *out = std::move(b.value);
-    return std::string();
-  };
-  for (auto [bytes, slot] : {std::pair{sizeof(GpuFrame), &im.frame_buf},
-                             std::pair{im.words.size() * sizeof(glm::vec4), &im.scene_buf},
-                             std::pair{pixels * kChannelCount * sizeof(float), &im.image_buf},
-                             std::pair{std::size_t(16), &im.counter_buf}}) {
-    std::string e = make(bytes, slot);
-    if (!e.empty()) return Out{nullptr, e};
+  const std::size_t bytes[] = {sizeof(GpuFrame), im.words.size() * sizeof(glm::vec4),
+                               pixels * kChannelCount * sizeof(float), 16};
+  std::unique_ptr<vk::Buffer>* slots[] = {&im.frame_buf, &im.scene_buf, &im.image_buf, &im.counter_buf};
+  for (int i = 0; i < 4; ++i) {
+    auto b = im.ctx->CreateBuffer(bytes[i], kinds[i]);
+    if (!b) return Out{nullptr, b.error};
+    *slots[i] = std::move(b.value);
   }
   std::memcpy(im.scene_buf->data(), im.words.data(), im.words.size() * sizeof(glm::vec4));
 

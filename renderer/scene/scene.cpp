@@ -192,9 +192,9 @@ void BuildNode(std::vector<BvhNode>& nodes, std::vector<int>& order, int begin, 
     centroids.Add({c, c});
   }
   nodes[index].box = box;
-  if (end - begin <= 2) {
+  if (end - begin == 1) {
     nodes[index].first = begin;
-    nodes[index].count = end - begin;
+    nodes[index].count = 1;
   } else {
     glm::dvec3 ext = centroids.hi - centroids.lo;
     int axis = ext.x > ext.y ? (ext.x > ext.z ? 0 : 2) : (ext.y > ext.z ? 1 : 2);
@@ -396,6 +396,17 @@ std::string MaterialSpec(const shading::MaterialDesc& m) {
   return o.str();
 }
 
+int SceneFeatures(const Scene& scene) {
+  constexpr int kSpheres = 1, kCapsules = 2, kPlanes = 4, kBumps = 8;  // scene.glsl's SCENE_*
+  int mask = 0;
+  for (const Primitive& p : scene.primitives) {
+    if (p.type == Primitive::Type::kSphere) mask |= kSpheres;
+    if (p.type == Primitive::Type::kCapsule) mask |= kCapsules;
+    if (p.type == Primitive::Type::kPlane) mask |= kPlanes | (p.bump_slope != 0 ? kBumps : 0);
+  }
+  return mask;
+}
+
 std::vector<glm::vec4> PackScene(const Scene& scene) {
   std::vector<Primitive> bounded, unbounded;
   for (const Primitive& p : scene.primitives)
@@ -410,7 +421,7 @@ std::vector<glm::vec4> PackScene(const Scene& scene) {
   for (const BvhNode& n : nodes) {
     words.push_back({float(n.box.lo.x), float(n.box.lo.y), float(n.box.lo.z), float(n.skip)});
     words.push_back({float(n.box.hi.x), float(n.box.hi.y), float(n.box.hi.z),
-                     float(n.count > 0 ? 8 * n.first + n.count : 0)});
+                     float(n.count > 0 ? n.first + 1 : 0)});
   }
   auto push = [&words](const Primitive& p) {
     words.push_back(PrimWord0(p));

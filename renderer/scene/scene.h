@@ -60,6 +60,9 @@ std::string MaterialSpec(const shading::MaterialDesc& m);
 
 // The words of scene.glsl's layout, BVH included.
 std::vector<glm::vec4> PackScene(const Scene& scene);
+// The SCENE_* bit mask of scene.glsl: which primitive kinds the scene holds,
+// so that the kernel is specialised to them.
+int SceneFeatures(const Scene& scene);
 
 // --- camera paths -------------------------------------------------------------
 

@@ -17,6 +17,8 @@ layout(local_size_x = 64) in;
 layout(constant_id = 0) const int VARIANT_ID = 0;
 layout(constant_id = 1) const int DERIV_MODE = 0;  // DERIV_* of pixel.glsl
 layout(constant_id = 2) const int SPP_N = 1;       // N x N stratified sub-pixel samples; 1 = pixel centre
+layout(constant_id = 3) const int SCENE_FEATURES = 15;  // SCENE_* bits of scene.glsl: the primitive kinds present
+#define SHIMMER_SCENE_FEATURES
 
 struct CameraGpu {
   vec4 posTan;      // position, tan(fov_y / 2)
@@ -25,7 +27,9 @@ struct CameraGpu {
   vec4 up;
 };
 
-layout(std430, binding = 0) readonly buffer FrameBuf {
+// A uniform buffer: every invocation reads it at fixed addresses, which lavapipe
+// turns into one scalar load (a storage-buffer load goes lane by lane).
+layout(std140, binding = 0) uniform FrameBuf {
   CameraGpu cam;
   CameraGpu prevCam;
   vec4 lightA;  // direction or centre, type
@@ -131,6 +135,39 @@ vec2 sampleJitter(ivec2 px, int s) {
   return vec2(float(h >> 8), float(h2 >> 8)) * (1.0 / 16777216.0);
 }
 
+// Sample k of the pixel: N x N jittered strata (box filter).
+Ray sampleRay(Camera c, ivec2 px, int k) {
+  int j = k / SPP_N;
+  int i = k - j * SPP_N;
+  return cameraRay(c, vec2(px) + (vec2(i, j) + sampleJitter(px, k)) / float(SPP_N));
+}
+
+// Running sums of one pixel's samples in this round: radiance sums and the
+// luminance mean and M2 (Welford).
+struct SampleSums {
+  vec3 spec;
+  vec3 diff;
+  float meanY;
+  float m2;
+};
+
+SampleSums addSample(SampleSums a, int k, SurfaceSample s, Ray ray, Light light, Material m, VariantParams vp) {
+  ShadingFootprint f = zeroFootprint(s);
+#ifdef SHIMMER_USER_VARIANT
+  f = analyticFootprint(s, ray, light);
+#else
+  if (VARIANT_ID != VARIANT_NONE) f = analyticFootprint(s, ray, light);
+#endif
+  PixelShade sh = shadeSample(s, f, runVariant(m.ndf, m.alpha, f, vp), m);
+  a.spec += sh.specular;
+  a.diff += sh.diffuse;
+  float y = luminance(sh.specular + sh.diffuse);
+  float delta = y - a.meanY;
+  a.meanY += delta / float(k + 1);
+  a.m2 += delta * (y - a.meanY);
+  return a;
+}
+
 void main() {
   uint lin = gl_SubgroupID * gl_SubgroupSize + gl_SubgroupInvocationID;
   uint quad = lin >> 2u;
@@ -203,31 +240,25 @@ void main() {
     float se = sqrt(m2A / ((countA - 1.0) * countA));
     if (se <= pc.target.x * max(meanYA, pc.target.y)) return;  // converged
   }
-  vec3 specSum = vec3(0.0);
-  vec3 diffSum = vec3(0.0);
-  float meanY = 0.0;
-  float m2 = 0.0;
-  for (int j = 0; j < SPP_N; j++) {
-    for (int i = 0; i < SPP_N; i++) {
-      int k = j * SPP_N + i;
-      vec2 pos = vec2(px) + (vec2(i, j) + sampleJitter(px, k)) / float(SPP_N);
-      Ray ray = cameraRay(c, pos);
-      SurfaceSample s = traceRay(ray, light);
-      ShadingFootprint f = zeroFootprint(s);
-#ifdef SHIMMER_USER_VARIANT
-      f = analyticFootprint(s, ray, light);
-#else
-      if (VARIANT_ID != VARIANT_NONE) f = analyticFootprint(s, ray, light);
-#endif
-      PixelShade sh = shadeSample(s, f, runVariant(m.ndf, m.alpha, f, vp), m);
-      specSum += sh.specular;
-      diffSum += sh.diffuse;
-      float y = luminance(sh.specular + sh.diffuse);
-      float delta = y - meanY;
-      meanY += delta / float(k + 1);
-      m2 += delta * (y - meanY);
-    }
+  // Two loops rather than one with a branch inside: lavapipe runs both sides
+  // of a branch for every sample, while a loop whose lanes are all done costs
+  // one pass. Almost every pixel has few candidates.
+  PixelCandidates candidates = pixelCandidates(pixelCone(c, px));
+  bool fewCandidates = candidates.count <= PIXEL_CANDIDATES;
+  const int samples = SPP_N * SPP_N;
+  SampleSums sums = SampleSums(vec3(0.0), vec3(0.0), 0.0, 0.0);
+  for (int k = 0; k < (fewCandidates ? samples : 0); k++) {
+    Ray ray = sampleRay(c, px, k);
+    sums = addSample(sums, k, tracePixelRay(candidates, ray, light), ray, light, m, vp);
   }
+  for (int k = 0; k < (fewCandidates ? 0 : samples); k++) {
+    Ray ray = sampleRay(c, px, k);
+    sums = addSample(sums, k, traceRay(ray, light), ray, light, m, vp);
+  }
+  vec3 specSum = sums.spec;
+  vec3 diffSum = sums.diff;
+  float meanY = sums.meanY;
+  float m2 = sums.m2;
   float countB = float(SPP_N * SPP_N);
   float count = countA + countB;
   float d = meanY - meanYA;

@@ -95,10 +95,16 @@ SurfaceSample surfaceAt(int prim, vec3 p, vec3 eye, Light light) {
   return s;
 }
 
-SurfaceSample traceRay(Ray r, Light light) {
-  Hit hit = traceScene(r.o, r.d);
+SurfaceSample surfaceOfHit(Hit hit, Ray r, Light light) {
   if (hit.prim < 0) return missedSample();
   return surfaceAt(hit.prim, r.o + r.d * hit.t, r.o, light);
+}
+
+SurfaceSample traceRay(Ray r, Light light) { return surfaceOfHit(traceScene(r.o, r.d), r, light); }
+
+// traceRay for a ray inside the pixel whose candidates l holds.
+SurfaceSample tracePixelRay(PixelCandidates l, Ray r, Light light) {
+  return surfaceOfHit(traceCandidates(l, r.o, r.d), r, light);
 }
 
 // A pixel shader's helper lane keeps interpolating its own triangle past the

@@ -5,7 +5,7 @@
 // The scene is a flat array of vec4 words (renderer/scene/scene.cpp packs it;
 // floats hold small integers exactly):
 //   word 0                       (bvhPrimCount, nodeCount, firstPrimWord, unboundedPrimCount)
-//   node i, words 1 + 2i, 2 + 2i (bbmin, skip), (bbmax, 8 firstPrim + primCount; 0 = interior)
+//   node i, words 1 + 2i, 2 + 2i (bbmin, skip), (bbmax, leaf's primitive + 1; 0 = interior)
 //     nodes in depth-first order: an interior node's first child is the next
 //     node, `skip` is the node after its subtree (a stackless walk: no local
 //     arrays, which SIMD CPU drivers such as lavapipe handle slowly)
@@ -21,6 +21,19 @@ vec4 sceneWord(int i) { return vec4(real(0), real(0), real(0), real(0)); }
 const int PRIM_SPHERE = 0;
 const int PRIM_CAPSULE = 1;
 const int PRIM_PLANE = 2;
+
+// What kinds of primitive a scene holds, a bit mask. The GPU kernel makes it a
+// specialization constant: SIMD CPU drivers (lavapipe) run both sides of every
+// branch under a lane mask, so code for a kind the scene lacks still costs its
+// full time unless the compiler can drop it (a capsule test halved the sphere
+// scene's sample rate). The C++ oracle handles every kind.
+const int SCENE_SPHERES = 1;
+const int SCENE_CAPSULES = 2;
+const int SCENE_PLANES = 4;
+const int SCENE_BUMPS = 8;  // planes with a normal pattern
+#ifndef SHIMMER_SCENE_FEATURES
+const int SCENE_FEATURES = SCENE_SPHERES | SCENE_CAPSULES | SCENE_PLANES | SCENE_BUMPS;
+#endif
 const real RAY_TMIN = real(1e-4);
 const real RAY_TMAX = real(1e30);
 
@@ -86,6 +99,11 @@ struct Prim {
   vec3 a;          // sphere centre; capsule end
   vec3 b;          // capsule end
 };
+
+bool isSphere(Prim p) { return (SCENE_FEATURES & SCENE_SPHERES) != 0 && p.type == PRIM_SPHERE; }
+bool isCapsule(Prim p) { return (SCENE_FEATURES & SCENE_CAPSULES) != 0 && p.type == PRIM_CAPSULE; }
+bool isPlane(Prim p) { return (SCENE_FEATURES & SCENE_PLANES) != 0 && p.type == PRIM_PLANE; }
+bool isBumpy(Prim p) { return (SCENE_FEATURES & SCENE_BUMPS) != 0 && p.type == PRIM_PLANE && p.bumpSlope != real(0); }
 
 int scenePrimWord(int index) { return int(sceneWord(0).z) + 3 * index; }
 
@@ -158,9 +176,10 @@ real intersectPlane(vec3 o, vec3 d, real height) {
 }
 
 real intersectPrim(Prim p, vec3 o, vec3 d) {
-  if (p.type == PRIM_SPHERE) return intersectSphere(o, d, p.a, p.radius);
-  if (p.type == PRIM_CAPSULE) return intersectCapsule(o, d, p.a, p.b, p.radius);
-  return intersectPlane(o, d, p.radius);
+  if (isSphere(p)) return intersectSphere(o, d, p.a, p.radius);
+  if (isCapsule(p)) return intersectCapsule(o, d, p.a, p.b, p.radius);
+  if (isPlane(p)) return intersectPlane(o, d, p.radius);
+  return real(-1);
 }
 
 // Slab test; returns the entry distance or RAY_TMAX for a miss.
@@ -198,32 +217,169 @@ Hit traceScene(vec3 o, vec3 d) {
   }
   if (nodes == 0) return hit;
   vec3 invD = vec3(safeInverse(d.x), safeInverse(d.y), safeInverse(d.z));
+  // One straight-line body per node (leaves hold one primitive): a SIMD CPU
+  // driver runs every statement of the body for all lanes anyway, and a nested
+  // per-leaf loop cost twice as much.
   int node = 0;
   while (node < nodes) {
     vec4 n0 = sceneWord(1 + 2 * node);
     vec4 n1 = sceneWord(2 + 2 * node);
-    int skip = int(n0.w);
-    if (intersectBox(o, invD, vec3(n0.x, n0.y, n0.z), vec3(n1.x, n1.y, n1.z), hit.t) == RAY_TMAX) {
-      node = skip;
-      continue;
-    }
-    int packed = int(n1.w);
-    if (packed == 0) {
-      node = node + 1;
-      continue;
-    }
-    int first = packed / 8;
-    int count = packed - 8 * first;
-    for (int i = first; i < first + count; i++) {
-      real t = intersectPrim(loadPrim(i), o, d);
+    bool inBox = intersectBox(o, invD, vec3(n0.x, n0.y, n0.z), vec3(n1.x, n1.y, n1.z), hit.t) != RAY_TMAX;
+    int prim = int(n1.w) - 1;  // -1: interior
+    if (inBox && prim >= 0) {
+      real t = intersectPrim(loadPrim(prim), o, d);
       if (t > real(0) && t < hit.t) {
         hit.t = t;
-        hit.prim = i;
+        hit.prim = prim;
       }
     }
-    node = skip;
+    node = inBox && prim < 0 ? node + 1 : int(n0.w);
   }
   return hit;
+}
+
+// ---- per-pixel candidate lists -----------------------------------------------
+// Every sample of a pixel leaves the pinhole's origin inside the cone around
+// the pixel-centre ray that holds the pixel's four corner rays. The reference
+// finds the primitives that cone touches once per pixel and tests only those
+// per sample: one BVH walk instead of N x N. A conservative test keeps the
+// result exactly that of traceScene (same primitives, same order, same ties).
+
+const int PIXEL_CANDIDATES = 4;  // more: the pixel's samples walk the BVH
+
+struct PixelCone {
+  vec3 o;
+  vec3 axis;
+  real cosA;  // half-angle, slightly widened
+  real sinA;
+};
+
+PixelCone pixelCone(Camera c, ivec2 px) {
+  vec2 base = vec2(real(px.x), real(px.y));
+  PixelCone k;
+  k.o = c.pos;
+  k.axis = cameraRay(c, base + vec2(real(0.5), real(0.5))).d;
+  real cosA = dot(k.axis, cameraRay(c, base).d);
+  cosA = min(cosA, dot(k.axis, cameraRay(c, base + vec2(real(1), real(0))).d));
+  cosA = min(cosA, dot(k.axis, cameraRay(c, base + vec2(real(0), real(1))).d));
+  cosA = min(cosA, dot(k.axis, cameraRay(c, base + vec2(real(1), real(1))).d));
+  // Widen by 1e-3 relative plus an absolute floor: rounding in the corner
+  // rays must never drop a primitive a sample ray hits.
+  k.sinA = min(sqrt(max(real(1) - cosA * cosA, real(0))) * real(1.001) + real(1e-5), real(1));
+  k.cosA = sqrt(real(1) - k.sinA * k.sinA);
+  return k;
+}
+
+// A lower bound of the distance from point q to the cone: rho cosA - z sinA
+// (rho: distance from the axis, z: depth along it) equals that distance where
+// the nearest cone point is on the mantle and is below it elsewhere (Cauchy-
+// Schwarz), so "<= r" never rejects a sphere of radius r the cone touches.
+real coneDistanceBound(PixelCone k, vec3 q) {
+  vec3 v = q - k.o;
+  real z = dot(v, k.axis);
+  real rho = length(v - k.axis * z);
+  return rho * k.cosA - z * k.sinA;
+}
+
+// r plus a margin for rounding, relative to the distance from the eye.
+real relaxedRadius(real r, real distance) { return r * real(1.0001) + real(1e-5) * distance; }
+
+bool coneTouchesSphere(PixelCone k, vec3 c, real r) {
+  return coneDistanceBound(k, c) <= relaxedRadius(r, length(c - k.o));
+}
+
+// Capsule a-b: the segment point nearest the axis line bounds rho from below
+// and the deeper end bounds z from above.
+bool coneTouchesCapsule(PixelCone k, vec3 a, vec3 b, real r) {
+  vec3 w = a - k.o;
+  vec3 u = b - a;
+  vec3 wp = w - k.axis * dot(w, k.axis);
+  vec3 up = u - k.axis * dot(u, k.axis);
+  real uu = dot(up, up);
+  real s = uu > real(1e-20) ? clamp(-dot(wp, up) / uu, real(0), real(1)) : real(0);
+  real rho = length(wp + up * s);
+  real zMax = max(dot(w, k.axis), dot(b - k.o, k.axis));
+  return rho * k.cosA - zMax * k.sinA <= relaxedRadius(r, max(length(w), length(b - k.o)));
+}
+
+bool coneTouchesPrim(PixelCone k, Prim p) {
+  if (isSphere(p)) return coneTouchesSphere(k, p.a, p.radius);
+  if (isCapsule(p)) return coneTouchesCapsule(k, p.a, p.b, p.radius);
+  return true;  // planes are unbounded
+}
+
+struct PixelCandidates {
+  int count;  // > PIXEL_CANDIDATES: too many, trace the whole scene
+  int id0;    // -1: empty slot
+  int id1;
+  int id2;
+  int id3;
+  Prim p0;
+  Prim p1;
+  Prim p2;
+  Prim p3;
+};
+
+PixelCandidates withCandidate(PixelCandidates l, int id) {
+  if (l.count == 0) l.id0 = id;
+  if (l.count == 1) l.id1 = id;
+  if (l.count == 2) l.id2 = id;
+  if (l.count == 3) l.id3 = id;
+  l.count = l.count + 1;
+  return l;
+}
+
+PixelCandidates pixelCandidates(PixelCone k) {
+  PixelCandidates l;
+  l.count = 0;
+  l.id0 = -1;
+  l.id1 = -1;
+  l.id2 = -1;
+  l.id3 = -1;
+  vec4 header = sceneWord(0);
+  int bvhPrims = int(header.x);
+  int nodes = int(header.y);
+  int unbounded = int(header.w);
+  for (int i = 0; i < unbounded; i++) l = withCandidate(l, bvhPrims + i);
+  int node = 0;
+  while (node < nodes) {
+    vec4 n0 = sceneWord(1 + 2 * node);
+    vec4 n1 = sceneWord(2 + 2 * node);
+    vec3 lo = vec3(n0.x, n0.y, n0.z);
+    vec3 hi = vec3(n1.x, n1.y, n1.z);
+    bool inCone = coneTouchesSphere(k, (lo + hi) * real(0.5), length(hi - lo) * real(0.5));
+    int prim = int(n1.w) - 1;
+    if (inCone && prim >= 0 && coneTouchesPrim(k, loadPrim(prim))) l = withCandidate(l, prim);
+    node = inCone && prim < 0 ? node + 1 : int(n0.w);
+  }
+  l.p0 = loadPrim(max(l.id0, 0));
+  l.p1 = loadPrim(max(l.id1, 0));
+  l.p2 = loadPrim(max(l.id2, 0));
+  l.p3 = loadPrim(max(l.id3, 0));
+  return l;
+}
+
+Hit nearerHit(Hit h, Prim p, int id, vec3 o, vec3 d) {
+  if (id < 0) return h;
+  real t = intersectPrim(p, o, d);
+  if (t > real(0) && t < h.t) {
+    h.t = t;
+    h.prim = id;
+  }
+  return h;
+}
+
+// traceScene for a ray of the pixel whose candidates l holds; only when
+// l.count <= PIXEL_CANDIDATES (the caller branches once per pixel, not per ray).
+Hit traceCandidates(PixelCandidates l, vec3 o, vec3 d) {
+  Hit h;
+  h.prim = -1;
+  h.t = RAY_TMAX;
+  h = nearerHit(h, l.p0, l.id0, o, d);
+  h = nearerHit(h, l.p1, l.id1, o, d);
+  h = nearerHit(h, l.p2, l.id2, o, d);
+  h = nearerHit(h, l.p3, l.id3, o, d);
+  return h;
 }
 
 // ---- surface attributes -----------------------------------------------------
@@ -267,8 +423,8 @@ vec3 capsuleAxisPoint(Prim p, vec3 q) {
 // The unnormalised geometric normal of p's surface continued through q, q
 // anywhere (helper-lane extrapolation evaluates points off the surface).
 vec3 geometricNormalDir(Prim p, vec3 q) {
-  if (p.type == PRIM_SPHERE) return q - p.a;
-  if (p.type == PRIM_CAPSULE) return q - capsuleAxisPoint(p, q);
+  if (isSphere(p)) return q - p.a;
+  if (isCapsule(p)) return q - capsuleAxisPoint(p, q);
   return vec3(real(0), real(1), real(0));
 }
 
@@ -278,8 +434,8 @@ vec3 geometricNormalAt(Prim p, vec3 q) {
 
 // d(geometric normal) for a move dq on the surface.
 vec3 geometricNormalDeriv(Prim p, vec3 q, vec3 dq) {
-  if (p.type == PRIM_SPHERE) return dNormalize(q - p.a, dq);
-  if (p.type == PRIM_CAPSULE) {
+  if (isSphere(p)) return dNormalize(q - p.a, dq);
+  if (isCapsule(p)) {
     vec3 ba = p.b - p.a;
     real h = dot(q - p.a, ba) / dot(ba, ba);
     vec3 along = (h > real(0) && h < real(1)) ? ba * (dot(dq, ba) / dot(ba, ba)) : vec3(real(0), real(0), real(0));
@@ -289,13 +445,13 @@ vec3 geometricNormalDeriv(Prim p, vec3 q, vec3 dq) {
 }
 
 vec3 shadingNormalAt(Prim p, vec3 q) {
-  if (p.type != PRIM_PLANE || p.bumpSlope == real(0)) return geometricNormalAt(p, q);
+  if (!isBumpy(p)) return geometricNormalAt(p, q);
   vec2 g = bumpGradient(p, q);
   return normalize(vec3(-g.x, real(1), -g.y));
 }
 
 vec3 shadingNormalDeriv(Prim p, vec3 q, vec3 dq) {
-  if (p.type != PRIM_PLANE || p.bumpSlope == real(0)) return geometricNormalDeriv(p, q, dq);
+  if (!isBumpy(p)) return geometricNormalDeriv(p, q, dq);
   vec2 g = bumpGradient(p, q);
   vec2 dg = bumpGradientDeriv(p, q, dq);
   return dNormalize(vec3(-g.x, real(1), -g.y), vec3(-dg.x, real(0), -dg.y));
@@ -305,8 +461,8 @@ vec3 shadingNormalDeriv(Prim p, vec3 q, vec3 dq) {
 // cross(axis, n) (around a sphere's pole, around a capsule, along x on a plane).
 vec3 tangentAxis(Prim p, vec3 n) {
   vec3 axis = vec3(real(0), real(1), real(0));
-  if (p.type == PRIM_CAPSULE) axis = normalize(p.b - p.a);
-  if (p.type == PRIM_PLANE) axis = vec3(real(0), real(0), real(1));
+  if (isCapsule(p)) axis = normalize(p.b - p.a);
+  if (isPlane(p)) axis = vec3(real(0), real(0), real(1));
   vec3 c = cross(axis, n);
   if (dot(c, c) < real(1e-12)) axis = vec3(real(1), real(0), real(0));
   return axis;

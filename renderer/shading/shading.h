@@ -108,6 +108,22 @@ PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc&
                        const MaterialDesc& material, int variant, DerivativeSource derivatives,
                        const Params<double>& params, glm::ivec2 px);
 
+// The nearest primitive along the ray through sub-pixel position `offset`
+// ([0,1]^2) of pixel px, found two ways: by the full BVH walk (traceScene) and
+// by the pixel's candidate list (traceCandidates), which the reference kernel
+// uses. In float, as on the GPU. `candidates` > kPixelCandidates means the
+// kernel walks the BVH for that pixel.
+struct PixelTraceCheck {
+  int scene_prim = -1;
+  float scene_t = 0;
+  int candidate_prim = -1;
+  float candidate_t = 0;
+  int candidates = 0;
+};
+inline constexpr int kPixelCandidates = 4;  // PIXEL_CANDIDATES of scene.glsl
+PixelTraceCheck TracePixelBothWays(std::span<const glm::vec4> scene_words, int scene_features,
+                                   const CameraDesc& camera, glm::ivec2 px, glm::dvec2 offset);
+
 // --- Variant catalogue ------------------------------------------------------
 
 struct ParamInfo {

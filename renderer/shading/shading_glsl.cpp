@@ -7,9 +7,15 @@ namespace shimmer::shading {
 namespace {
 // The scene the GLSL's sceneWord() reads in C++ (set by ShadePixel).
 thread_local std::span<const glm::vec4> g_scene_words;
+// SCENE_FEATURES of scene.glsl: every kind, except where a test specialises
+// the core as the kernel does.
+constexpr int kAllSceneFeatures = 15;
+thread_local int g_scene_features = kAllSceneFeatures;
 }  // namespace
 
 #define SHIMMER_SCENE_WORDS
+#define SHIMMER_SCENE_FEATURES
+#define SCENE_FEATURES g_scene_features
 namespace glsl_f32 {
 using real = float;
 #include "glsl_compat.h"
@@ -109,19 +115,53 @@ SHIMMER_INSTANTIATE(float)
 SHIMMER_INSTANTIATE(double)
 #undef SHIMMER_INSTANTIATE
 
+namespace {
+template <class Camera>
+Camera GlslCamera(const CameraDesc& camera) {
+  using V3 = decltype(Camera::pos);
+  using V2 = decltype(Camera::size);
+  using Real = decltype(Camera::aspect);
+  Camera c;
+  c.pos = V3(camera.pos);
+  c.fwd = V3(camera.fwd);
+  c.right = V3(camera.right);
+  c.up = V3(camera.up);
+  c.tanHalfFovY = Real(camera.tan_half_fov_y);
+  c.aspect = Real(double(camera.width) / double(camera.height));
+  c.size = V2(camera.width, camera.height);
+  return c;
+}
+}  // namespace
+
+PixelTraceCheck TracePixelBothWays(std::span<const glm::vec4> scene_words, int scene_features,
+                                   const CameraDesc& camera, glm::ivec2 px, glm::dvec2 offset) {
+  using namespace glsl_f32;
+  g_scene_words = scene_words;
+  g_scene_features = scene_features;
+  Camera c = GlslCamera<Camera>(camera);
+  Ray r = cameraRay(c, vec2(px) + vec2(offset));
+  Hit full = traceScene(r.o, r.d);
+  PixelCandidates l = pixelCandidates(pixelCone(c, px));
+  PixelTraceCheck out;
+  out.scene_prim = full.prim;
+  out.scene_t = full.t;
+  out.candidates = l.count;
+  if (l.count <= PIXEL_CANDIDATES) {
+    Hit h = traceCandidates(l, r.o, r.d);
+    out.candidate_prim = h.prim;
+    out.candidate_t = h.t;
+  }
+  g_scene_words = {};
+  g_scene_features = kAllSceneFeatures;
+  return out;
+}
+
 PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc& camera, const LightDesc& light,
                        const MaterialDesc& material, int variant, DerivativeSource derivatives,
                        const Params<double>& params, glm::ivec2 px) {
   using namespace glsl_f64;
   g_scene_words = scene_words;
-  Camera c;
-  c.pos = camera.pos;
-  c.fwd = camera.fwd;
-  c.right = camera.right;
-  c.up = camera.up;
-  c.tanHalfFovY = camera.tan_half_fov_y;
-  c.aspect = double(camera.width) / double(camera.height);
-  c.size = glm::dvec2(camera.width, camera.height);
+  Camera c = GlslCamera<Camera>(camera);
   Light l;
   l.type = static_cast<int>(light.type);
   l.vec = light.vec;

@@ -68,6 +68,7 @@ DeviceInfo Describe(VkPhysicalDevice pd) {
   info.quad_ops_in_compute = (subgroup.supportedOperations & VK_SUBGROUP_FEATURE_QUAD_BIT) &&
                              (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT);
   info.max_storage_buffer_range = props.properties.limits.maxStorageBufferRange;
+  info.max_uniform_buffer_range = props.properties.limits.maxUniformBufferRange;
   int family = ComputeQueueFamily(pd);
   if (family >= 0) {
     std::uint32_t n = 0;
@@ -146,9 +147,13 @@ struct ComputePipeline::Impl {
   VkPipeline pipeline = VK_NULL_HANDLE;
   VkDescriptorPool pool = VK_NULL_HANDLE;
   VkDescriptorSet set = VK_NULL_HANDLE;
-  int buffer_count = 0;
+  std::vector<BufferKind> bindings;
   std::uint32_t push_bytes = 0;
 };
+
+VkDescriptorType DescriptorType(BufferKind kind) {
+  return kind == BufferKind::kUniform ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+}
 
 ComputePipeline::~ComputePipeline() {
   if (!impl_) return;
@@ -275,13 +280,18 @@ Expected<Context> Context::Create(const ContextOptions& options) {
 
 Context::~Context() = default;
 
-Expected<Buffer> Context::CreateBuffer(std::size_t bytes) {
+Expected<Buffer> Context::CreateBuffer(std::size_t bytes, BufferKind kind) {
   Expected<Buffer> out;
   Impl& c = *impl_;
   bytes = std::max<std::size_t>(bytes, 16);
-  if (bytes > info_.max_storage_buffer_range) {
+  if (kind == BufferKind::kStorage && bytes > info_.max_storage_buffer_range) {
     out.error = "a storage buffer of " + std::to_string(bytes >> 20) + " MiB exceeds the device's limit of " +
                 std::to_string(info_.max_storage_buffer_range >> 20) + " MiB; render a smaller image";
+    return out;
+  }
+  if (kind == BufferKind::kUniform && bytes > info_.max_uniform_buffer_range) {
+    out.error = "a uniform buffer of " + std::to_string(bytes) + " bytes exceeds the device's limit of " +
+                std::to_string(info_.max_uniform_buffer_range) + " bytes";
     return out;
   }
   std::unique_ptr<Buffer> buf(new Buffer());
@@ -289,7 +299,7 @@ Expected<Buffer> Context::CreateBuffer(std::size_t bytes) {
   buf->impl_->device = c.device;
   VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
   bci.size = bytes;
-  bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  bci.usage = kind == BufferKind::kUniform ? VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT : VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
   VkResult r = vkCreateBuffer(c.device, &bci, nullptr, &buf->impl_->buffer);
   if (r != VK_SUCCESS) {
@@ -325,13 +335,15 @@ Expected<Buffer> Context::CreateBuffer(std::size_t bytes) {
     return out;
   }
   buf->size_ = bytes;
+  buf->kind_ = kind;
   std::memset(buf->mapped_, 0, bytes);
   out.value = std::move(buf);
   return out;
 }
 
 Expected<ComputePipeline> Context::CreatePipeline(std::span<const std::uint32_t> spirv,
-                                                  std::span<const std::int32_t> specialization, int buffer_count,
+                                                  std::span<const std::int32_t> specialization,
+                                                  std::span<const BufferKind> buffer_kinds,
                                                   std::uint32_t push_bytes) {
   Expected<ComputePipeline> out;
   VkDevice d = impl_->device;
@@ -339,7 +351,8 @@ Expected<ComputePipeline> Context::CreatePipeline(std::span<const std::uint32_t>
   p->impl_ = std::make_unique<ComputePipeline::Impl>();
   ComputePipeline::Impl& pi = *p->impl_;
   pi.device = d;
-  pi.buffer_count = buffer_count;
+  pi.bindings.assign(buffer_kinds.begin(), buffer_kinds.end());
+  const auto buffer_count = static_cast<std::uint32_t>(buffer_kinds.size());
   pi.push_bytes = push_bytes;
   auto fail = [&out](const std::string& what, VkResult r) {
     out.error = "could not create the compute pipeline (" + what + "): " + ResultName(r);
@@ -351,11 +364,10 @@ Expected<ComputePipeline> Context::CreatePipeline(std::span<const std::uint32_t>
   if (VkResult r = vkCreateShaderModule(d, &smci, nullptr, &pi.module); r != VK_SUCCESS)
     return fail("shader module", r);
   std::vector<VkDescriptorSetLayoutBinding> bindings(buffer_count);
-  for (int i = 0; i < buffer_count; ++i)
-    bindings[i] = {static_cast<std::uint32_t>(i), VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT,
-                   nullptr};
+  for (std::uint32_t i = 0; i < buffer_count; ++i)
+    bindings[i] = {i, DescriptorType(buffer_kinds[i]), 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   VkDescriptorSetLayoutCreateInfo dsl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-  dsl.bindingCount = static_cast<std::uint32_t>(buffer_count);
+  dsl.bindingCount = buffer_count;
   dsl.pBindings = bindings.data();
   if (VkResult r = vkCreateDescriptorSetLayout(d, &dsl, nullptr, &pi.set_layout); r != VK_SUCCESS)
     return fail("descriptor set layout", r);
@@ -382,11 +394,12 @@ Expected<ComputePipeline> Context::CreatePipeline(std::span<const std::uint32_t>
   cpci.layout = pi.layout;
   if (VkResult r = vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpci, nullptr, &pi.pipeline); r != VK_SUCCESS)
     return fail("pipeline", r);
-  VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, static_cast<std::uint32_t>(buffer_count)};
+  const VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, buffer_count},
+                                        {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, buffer_count}};
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dpci.maxSets = 1;
-  dpci.poolSizeCount = 1;
-  dpci.pPoolSizes = &size;
+  dpci.poolSizeCount = 2;
+  dpci.pPoolSizes = sizes;
   if (VkResult r = vkCreateDescriptorPool(d, &dpci, nullptr, &pi.pool); r != VK_SUCCESS)
     return fail("descriptor pool", r);
   VkDescriptorSetAllocateInfo dsai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
@@ -407,7 +420,9 @@ DispatchResult Context::Dispatch(ComputePipeline& pipeline, std::span<Buffer* co
     result.error = "device lost";
     return result;
   }
-  if (static_cast<int>(buffers.size()) != pi.buffer_count || push.size() != pi.push_bytes) {
+  bool match = buffers.size() == pi.bindings.size() && push.size() == pi.push_bytes;
+  for (std::size_t i = 0; match && i < buffers.size(); ++i) match = buffers[i]->kind() == pi.bindings[i];
+  if (!match) {
     result.error = "dispatch does not match the pipeline's buffers or push constants";
     return result;
   }
@@ -419,7 +434,7 @@ DispatchResult Context::Dispatch(ComputePipeline& pipeline, std::span<Buffer* co
     writes[i].dstSet = pi.set;
     writes[i].dstBinding = static_cast<std::uint32_t>(i);
     writes[i].descriptorCount = 1;
-    writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[i].descriptorType = DescriptorType(pi.bindings[i]);
     writes[i].pBufferInfo = &infos[i];
   }
   vkUpdateDescriptorSets(c.device, static_cast<std::uint32_t>(writes.size()), writes.data(), 0, nullptr);

@@ -29,7 +29,13 @@ struct DeviceInfo {
   bool quad_ops_in_compute = false;
   double timestamp_period_ns = 0;  // 0: no timestamps on the compute queue
   std::uint64_t max_storage_buffer_range = 0;
+  std::uint64_t max_uniform_buffer_range = 0;
 };
+
+// How a kernel reads a buffer. Uniform buffers suit small read-only data read
+// at the same address by every invocation: lavapipe loads those once per
+// SIMD batch, while a storage-buffer load goes lane by lane.
+enum class BufferKind { kStorage, kUniform };
 
 struct ContextOptions {
   std::string device_name;  // substring of the device name; empty: prefer a discrete GPU
@@ -45,6 +51,7 @@ class Buffer {
   Buffer& operator=(const Buffer&) = delete;
   void* data() const { return mapped_; }
   std::size_t size() const { return size_; }
+  BufferKind kind() const { return kind_; }
 
  private:
   friend class Context;
@@ -53,6 +60,7 @@ class Buffer {
   std::unique_ptr<Impl> impl_;
   void* mapped_ = nullptr;
   std::size_t size_ = 0;
+  BufferKind kind_ = BufferKind::kStorage;
 };
 
 class ComputePipeline {
@@ -84,13 +92,12 @@ class Context {
 
   const DeviceInfo& device() const { return info_; }
 
-  Expected<Buffer> CreateBuffer(std::size_t bytes);
-  // A compute pipeline over `buffer_count` storage buffers at bindings
-  // 0..n-1, push constants of `push_bytes`, int specialization constants
-  // with ids 0..k-1.
+  Expected<Buffer> CreateBuffer(std::size_t bytes, BufferKind kind = BufferKind::kStorage);
+  // A compute pipeline over buffers of the given kinds at bindings 0..n-1,
+  // push constants of `push_bytes`, int specialization constants with ids 0..k-1.
   Expected<ComputePipeline> CreatePipeline(std::span<const std::uint32_t> spirv,
-                                           std::span<const std::int32_t> specialization, int buffer_count,
-                                           std::uint32_t push_bytes);
+                                           std::span<const std::int32_t> specialization,
+                                           std::span<const BufferKind> bindings, std::uint32_t push_bytes);
   // Records, submits and waits for one dispatch of groups_x * groups_y workgroups.
   DispatchResult Dispatch(ComputePipeline& pipeline, std::span<Buffer* const> buffers,
                           std::span<const std::byte> push, std::uint32_t groups_x, std::uint32_t groups_y);

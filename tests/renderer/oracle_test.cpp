@@ -53,6 +53,40 @@ TEST(Oracle, BvhTraceMatchesBruteForce) {
   EXPECT_GT(hits, size * size / 2);
 }
 
+// The reference kernel traces each sample against its pixel's candidate list
+// instead of the BVH. The list must give exactly the BVH's nearest hit for
+// every ray inside the pixel (corners included), in float as on the GPU, and
+// it must be short for almost every pixel, else the kernel falls back.
+TEST(Oracle, PixelCandidatesGiveTheBvhHitForEveryRayInThePixel) {
+  const glm::dvec2 offsets[] = {{0, 0}, {1, 0}, {0, 1}, {1, 1}, {0.5, 0.5}, {0.13, 0.91}, {0.77, 0.29}, {0.999, 0.001}};
+  for (const char* name : {"sphere", "sphere-field", "wires", "bumpy-plane"}) {
+    scene::Scene s = scene::LoadScene(name).value;
+    auto words = scene::PackScene(s);
+    const int features = scene::SceneFeatures(s);
+    int pixels = 0, overflow = 0, rays = 0, hits = 0;
+    for (int frame : {0, 7, 19}) {
+      shading::CameraDesc cam = scene::CameraAt(frame == 7 ? "dolly" : "orbit", s.rig, frame, 30, 96, 72);
+      for (int y = 0; y < cam.height; ++y)
+        for (int x = 0; x < cam.width; ++x) {
+          ++pixels;
+          for (glm::dvec2 o : offsets) {
+            auto r = shading::TracePixelBothWays(words, features, cam, {x, y}, o);
+            if (r.candidates > shading::kPixelCandidates) {
+              ++overflow;
+              break;
+            }
+            ++rays;
+            hits += r.scene_prim >= 0;
+            ASSERT_EQ(r.candidate_prim, r.scene_prim) << name << " frame " << frame << " pixel " << x << "," << y;
+            ASSERT_EQ(r.candidate_t, r.scene_t) << name << " frame " << frame << " pixel " << x << "," << y;
+          }
+        }
+    }
+    EXPECT_GT(hits, rays / 20) << name;
+    EXPECT_LT(overflow, pixels / 50) << name << ": " << overflow << " of " << pixels << " pixels overflow";
+  }
+}
+
 // On a large smooth sphere the ray-differential derivatives equal the quad
 // differences to first order (the difference is a half-pixel offset times curvature).
 TEST(Oracle, AnalyticDerivativesAgreeWithQuadDifferencesOnSmoothSurface) {

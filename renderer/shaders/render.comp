@@ -128,18 +128,22 @@ uint pcgHash(uint v) {
   return (word >> 22u) ^ word;
 }
 
-vec2 sampleJitter(ivec2 px, int s) {
-  uint h = pcgHash(uint(px.x) + pcgHash(uint(px.y) + pcgHash(uint(s) + pcgHash(uint(pc.round.x) +
-               pcgHash(uint(pc.round.y))))));
+// The pixel's seed for this round; each sample hashes it with its index.
+uint pixelSeed(ivec2 px) {
+  return pcgHash(uint(px.x) + pcgHash(uint(px.y) + pcgHash(uint(pc.round.x) + pcgHash(uint(pc.round.y)))));
+}
+
+vec2 sampleJitter(uint seed, int s) {
+  uint h = pcgHash(seed + uint(s) * 2654435769u);
   uint h2 = pcgHash(h);
   return vec2(float(h >> 8), float(h2 >> 8)) * (1.0 / 16777216.0);
 }
 
 // Sample k of the pixel: N x N jittered strata (box filter).
-Ray sampleRay(Camera c, ivec2 px, int k) {
+Ray sampleRay(Camera c, ivec2 px, uint seed, int k) {
   int j = k / SPP_N;
   int i = k - j * SPP_N;
-  return cameraRay(c, vec2(px) + (vec2(i, j) + sampleJitter(px, k)) / float(SPP_N));
+  return cameraRay(c, vec2(px) + (vec2(i, j) + sampleJitter(seed, k)) / float(SPP_N));
 }
 
 // Running sums of one pixel's samples in this round: radiance sums and the
@@ -246,13 +250,14 @@ void main() {
   PixelCandidates candidates = pixelCandidates(pixelCone(c, px));
   bool fewCandidates = candidates.count <= PIXEL_CANDIDATES;
   const int samples = SPP_N * SPP_N;
+  const uint seed = pixelSeed(px);
   SampleSums sums = SampleSums(vec3(0.0), vec3(0.0), 0.0, 0.0);
   for (int k = 0; k < (fewCandidates ? samples : 0); k++) {
-    Ray ray = sampleRay(c, px, k);
+    Ray ray = sampleRay(c, px, seed, k);
     sums = addSample(sums, k, tracePixelRay(candidates, ray, light), ray, light, m, vp);
   }
   for (int k = 0; k < (fewCandidates ? 0 : samples); k++) {
-    Ray ray = sampleRay(c, px, k);
+    Ray ray = sampleRay(c, px, seed, k);
     sums = addSample(sums, k, traceRay(ray, light), ray, light, m, vp);
   }
   vec3 specSum = sums.spec;

@@ -76,8 +76,7 @@ SurfaceSample missedSample() {
 
 // Surface attributes of primitive `prim` at point p (p may lie off the
 // surface when a neighbour's ray is continued on this primitive).
-SurfaceSample surfaceAt(int prim, vec3 p, vec3 eye, Light light) {
-  Prim pr = loadPrim(prim);
+SurfaceSample surfaceOfPrim(Prim pr, int prim, vec3 p, vec3 eye, Light light) {
   SurfaceSample s;
   s.prim = prim;
   s.p = p;
@@ -95,6 +94,10 @@ SurfaceSample surfaceAt(int prim, vec3 p, vec3 eye, Light light) {
   return s;
 }
 
+SurfaceSample surfaceAt(int prim, vec3 p, vec3 eye, Light light) {
+  return surfaceOfPrim(loadPrim(prim), prim, p, eye, light);
+}
+
 SurfaceSample surfaceOfHit(Hit hit, Ray r, Light light) {
   if (hit.prim < 0) return missedSample();
   return surfaceAt(hit.prim, r.o + r.d * hit.t, r.o, light);
@@ -104,7 +107,9 @@ SurfaceSample traceRay(Ray r, Light light) { return surfaceOfHit(traceScene(r.o,
 
 // traceRay for a ray inside the pixel whose candidates l holds.
 SurfaceSample tracePixelRay(PixelCandidates l, Ray r, Light light) {
-  return surfaceOfHit(traceCandidates(l, r.o, r.d), r, light);
+  Hit hit = traceCandidates(l, r.o, r.d);
+  if (hit.prim < 0) return missedSample();
+  return surfaceOfPrim(candidatePrim(l, hit.prim), hit.prim, r.o + r.d * hit.t, r.o, light);
 }
 
 // A pixel shader's helper lane keeps interpolating its own triangle past the

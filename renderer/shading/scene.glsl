@@ -369,6 +369,14 @@ Hit nearerHit(Hit h, Prim p, int id, vec3 o, vec3 d) {
   return h;
 }
 
+// Candidate `id`'s primitive, already loaded (id must be in the list).
+Prim candidatePrim(PixelCandidates l, int id) {
+  if (id == l.id1) return l.p1;
+  if (id == l.id2) return l.p2;
+  if (id == l.id3) return l.p3;
+  return l.p0;
+}
+
 // traceScene for a ray of the pixel whose candidates l holds; only when
 // l.count <= PIXEL_CANDIDATES (the caller branches once per pixel, not per ray).
 Hit traceCandidates(PixelCandidates l, vec3 o, vec3 d) {

@@ -260,16 +260,12 @@ void main() {
     Ray ray = sampleRay(c, px, seed, k);
     sums = addSample(sums, k, traceRay(ray, light), ray, light, m, vp);
   }
-  vec3 specSum = sums.spec;
-  vec3 diffSum = sums.diff;
-  float meanY = sums.meanY;
-  float m2 = sums.m2;
-  float countB = float(SPP_N * SPP_N);
+  float countB = float(samples);
   float count = countA + countB;
-  float d = meanY - meanYA;
-  float m2All = m2A + m2 + d * d * countA * countB / count;
-  vec3 spec = (specA * countA + specSum) / count;
-  vec3 diff = (diffA * countA + diffSum) / count;
+  float d = sums.meanY - meanYA;
+  float m2All = m2A + sums.m2 + d * d * countA * countB / count;
+  vec3 spec = (specA * countA + sums.spec) / count;
+  vec3 diff = (diffA * countA + sums.diff) / count;
   float se = sqrt(m2All / ((count - 1.0) * count));
   put3(CH_BEAUTY, idx, spec + diff);
   put3(CH_SPECULAR, idx, spec);

@@ -383,10 +383,13 @@ Hit traceCandidates(PixelCandidates l, vec3 o, vec3 d) {
   Hit h;
   h.prim = -1;
   h.t = RAY_TMAX;
-  h = nearerHit(h, l.p0, l.id0, o, d);
-  h = nearerHit(h, l.p1, l.id1, o, d);
-  h = nearerHit(h, l.p2, l.id2, o, d);
-  h = nearerHit(h, l.p3, l.id3, o, d);
+  // A loop to the pixel's count rather than four tests: a SIMD batch stops
+  // at its lanes' largest count, usually 1-2 (plane, sphere).
+  for (int i = 0; i < l.count; i++) {
+    Prim p = i == 0 ? l.p0 : (i == 1 ? l.p1 : (i == 2 ? l.p2 : l.p3));
+    int id = i == 0 ? l.id0 : (i == 1 ? l.id1 : (i == 2 ? l.id2 : l.id3));
+    h = nearerHit(h, p, id, o, d);
+  }
   return h;
 }
 

@@ -397,12 +397,12 @@ std::string MaterialSpec(const shading::MaterialDesc& m) {
 }
 
 int SceneFeatures(const Scene& scene) {
-  constexpr int kSpheres = 1, kCapsules = 2, kPlanes = 4, kBumps = 8;  // scene.glsl's SCENE_*
+  using namespace shading;
   int mask = 0;
   for (const Primitive& p : scene.primitives) {
-    if (p.type == Primitive::Type::kSphere) mask |= kSpheres;
-    if (p.type == Primitive::Type::kCapsule) mask |= kCapsules;
-    if (p.type == Primitive::Type::kPlane) mask |= kPlanes | (p.bump_slope != 0 ? kBumps : 0);
+    if (p.type == Primitive::Type::kSphere) mask |= kSceneSpheres;
+    if (p.type == Primitive::Type::kCapsule) mask |= kSceneCapsules;
+    if (p.type == Primitive::Type::kPlane) mask |= kScenePlanes | (p.bump_slope != 0 ? kSceneBumps : 0);
   }
   return mask;
 }

@@ -360,7 +360,6 @@ PixelCandidates pixelCandidates(PixelCone k) {
 }
 
 Hit nearerHit(Hit h, Prim p, int id, vec3 o, vec3 d) {
-  if (id < 0) return h;
   real t = intersectPrim(p, o, d);
   if (t > real(0) && t < h.t) {
     h.t = t;

@@ -121,6 +121,14 @@ struct PixelTraceCheck {
   int candidates = 0;
 };
 inline constexpr int kPixelCandidates = 4;  // PIXEL_CANDIDATES of scene.glsl
+
+// SCENE_* of scene.glsl: bits of the mask of primitive kinds a scene holds,
+// which specialises the kernel (shading_glsl.cpp checks that they agree).
+inline constexpr int kSceneSpheres = 1;
+inline constexpr int kSceneCapsules = 2;
+inline constexpr int kScenePlanes = 4;
+inline constexpr int kSceneBumps = 8;  // planes with a normal pattern
+inline constexpr int kAllSceneFeatures = kSceneSpheres | kSceneCapsules | kScenePlanes | kSceneBumps;
 PixelTraceCheck TracePixelBothWays(std::span<const glm::vec4> scene_words, int scene_features,
                                    const CameraDesc& camera, glm::ivec2 px, glm::dvec2 offset);
 

@@ -9,7 +9,6 @@ namespace {
 thread_local std::span<const glm::vec4> g_scene_words;
 // SCENE_FEATURES of scene.glsl: every kind, except where a test specialises
 // the core as the kernel does.
-constexpr int kAllSceneFeatures = 15;
 thread_local int g_scene_features = kAllSceneFeatures;
 }  // namespace
 
@@ -35,6 +34,10 @@ vec4 sceneWord(int i) {
 }
 #include "core.glsl"
 }  // namespace glsl_f64
+
+static_assert(kPixelCandidates == glsl_f32::PIXEL_CANDIDATES);
+static_assert(kSceneSpheres == glsl_f32::SCENE_SPHERES && kSceneCapsules == glsl_f32::SCENE_CAPSULES &&
+              kScenePlanes == glsl_f32::SCENE_PLANES && kSceneBumps == glsl_f32::SCENE_BUMPS);
 
 namespace {
 

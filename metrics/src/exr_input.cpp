@@ -67,7 +67,9 @@ struct ChunkPlace {
 Status ReadWithImf(const fs::path& file, int part, const ExrPartInfo& info,
                    const std::vector<ExrPlaneRequest>& requests) {
   static std::once_flag pool;
-  std::call_once(pool, [] { Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))); });
+  std::call_once(pool, [] {
+    Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+  });
   try {
     Imf::MultiPartInputFile in(file.c_str());
     Imf::InputPart input(in, part);

@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config git
-  libvulkan-dev mesa-vulkan-drivers vulkan-tools
+  libvulkan-dev mesa-vulkan-drivers vulkan-tools vulkan-validationlayers
   glslang-dev glslang-tools spirv-tools
   libopencv-dev libopenexr-dev openexr
   libceres-dev libeigen3-dev

@@ -175,13 +175,25 @@ struct Renderer::Impl {
   std::unique_ptr<vk::ComputePipeline> pipeline;
   std::unique_ptr<vk::Buffer> frame_buf, scene_buf, image_buf, counter_buf;
 
-  std::string Dispatch(const GpuPush& push, double* gpu_ms) {
+  // groups 0: the whole image.
+  std::string Dispatch(const GpuPush& push, double* gpu_ms, std::uint32_t groups_x = 0, std::uint32_t groups_y = 0) {
     vk::Buffer* bufs[] = {frame_buf.get(), scene_buf.get(), image_buf.get(), counter_buf.get()};
     auto bytes = std::as_bytes(std::span<const GpuPush>(&push, 1));
     auto groups = [](int n) { return std::uint32_t((n + 7) / 8); };
-    vk::DispatchResult r = ctx->Dispatch(*pipeline, bufs, bytes, groups(settings.width), groups(settings.height));
+    vk::DispatchResult r = ctx->Dispatch(*pipeline, bufs, bytes, groups_x ? groups_x : groups(settings.width),
+                                         groups_y ? groups_y : groups(settings.height));
     *gpu_ms += r.gpu_ms;
-    return r.error;
+    if (!r.error.empty()) return r.error;
+    return ValidationError();
+  }
+
+  // With validation on, anything the layer reported fails the render: a
+  // frame computed through an invalid API use is not a result.
+  std::string ValidationError() {
+    std::vector<std::string> messages = ctx->TakeValidationMessages();
+    if (messages.empty()) return "";
+    std::string more = messages.size() > 1 ? " (and " + std::to_string(messages.size() - 1) + " more)" : "";
+    return "Vulkan validation layer: " + messages.front() + more;
   }
 };
 
@@ -191,6 +203,7 @@ const RenderSettings& Renderer::settings() const { return impl_->settings; }
 const ResolvedVariant& Renderer::variant() const { return impl_->variant; }
 const Timings& Renderer::timings() const { return impl_->timings; }
 std::string Renderer::device_name() const { return impl_->ctx->device().name; }
+bool Renderer::validation_active() const { return impl_->ctx->validation_active(); }
 std::span<const glm::vec4> Renderer::scene_words() const { return impl_->words; }
 
 shading::CameraDesc Renderer::camera(int frame) const {
@@ -250,9 +263,8 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
 
   vk::ContextOptions options;
   options.device_name = settings.device;
-#ifndef NDEBUG
-  options.validation = true;
-#endif
+  options.validation = settings.validation;
+  options.lose_device_after_dispatches = settings.lose_device_after_dispatches;
   vk::Expected<vk::Context> ctx = vk::Context::Create(options);
   if (!ctx) return Out{nullptr, ctx.error};
   im.ctx = std::move(ctx.value);
@@ -290,11 +302,8 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
   empty.size[0] = 0;
   empty.size[1] = 0;
   std::memcpy(im.frame_buf->data(), &empty, sizeof empty);
-  GpuPush push{};
-  vk::Buffer* bufs[] = {im.frame_buf.get(), im.scene_buf.get(), im.image_buf.get(), im.counter_buf.get()};
-  vk::DispatchResult warm =
-      im.ctx->Dispatch(*im.pipeline, bufs, std::as_bytes(std::span<const GpuPush>(&push, 1)), 1, 1);
-  if (!warm.error.empty()) return Out{nullptr, warm.error};
+  double warm_ms = 0;
+  if (std::string e = im.Dispatch(GpuPush{}, &warm_ms, 1, 1); !e.empty()) return Out{nullptr, e};
   im.timings.jit_ms = MsSince(t2);
   return Out{std::move(r), ""};
 }
@@ -550,8 +559,13 @@ std::string RenderSequence(const RenderSettings& settings, const std::string& ou
     Renderer::Result r = renderer->RenderFrame(i);
     render_ms += MsSince(t0);
     if (!r.error.empty()) {
+      // Frames already handed to the writer are whole; this one never gets a file.
       writer.Finish();
-      return "frame " + std::to_string(i) + ": " + r.error;
+      const std::string error = "frame " + std::to_string(i) + ": " + r.error;
+      seq["status"] = "failed";
+      seq["error"] = error;
+      WriteJsonAtomically(seq_path, seq);
+      return error;
     }
     readback_ms += r.frame.readback_ms;
     nlohmann::json fj = {{"file", FrameName(i)}, {"gpu_ms", r.frame.gpu_ms}, {"time_s", i / settings.fps}};

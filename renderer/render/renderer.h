@@ -38,6 +38,12 @@ struct ExrChannel {
 // The EXR layers of DESIGN.md; stderr.Y only for the reference.
 std::vector<ExrChannel> ExrChannels(bool with_stderr);
 
+#ifdef NDEBUG
+inline constexpr bool kValidationByDefault = false;
+#else
+inline constexpr bool kValidationByDefault = true;
+#endif
+
 struct RenderSettings {
   scene::Scene scene;
   shading::MaterialDesc material;
@@ -55,6 +61,10 @@ struct RenderSettings {
   std::string variant_file;        // user variant GLSL defining userVariant(...)
   std::string device;              // substring of the Vulkan device name
   std::string preview_png;         // when set: a tone-mapped PNG of frame 0's beauty
+  // Khronos validation layer (when installed); anything it reports fails the
+  // render. On by default in debug builds.
+  bool validation = kValidationByDefault;
+  int lose_device_after_dispatches = -1;  // fault injection for tests, see vk::ContextOptions
 };
 
 // Luminance floor of the adaptive reference's relative error (dark pixels
@@ -107,6 +117,7 @@ class Renderer {
   const ResolvedVariant& variant() const;
   const Timings& timings() const;
   std::string device_name() const;
+  bool validation_active() const;  // the validation layer was asked for and is loaded
   std::span<const glm::vec4> scene_words() const;
   shading::CameraDesc camera(int frame) const;
 
@@ -121,7 +132,9 @@ std::string SourceRevision();
 
 // Renders settings.frames frames into out_dir (frame_NNNN.exr + sequence.json),
 // writing EXR on a worker thread while the next frame renders. sequence.json
-// says "status": "running" until every frame is on disk, then "complete".
+// says "status": "running" until every frame is on disk, then "complete"; a
+// frame that fails to render (device lost, a validation message) makes it
+// "failed" with the "error", the frames before it left whole.
 // Returns an error message, empty on success. `progress(done, total)` after each frame.
 std::string RenderSequence(const RenderSettings& settings, const std::string& out_dir,
                            const std::function<void(int, int)>& progress);

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <mutex>
+#include <utility>
 
 namespace shimmer::vk {
 
@@ -80,29 +82,68 @@ DeviceInfo Describe(VkPhysicalDevice pd) {
   return info;
 }
 
+// Where the validation layer's messages go; outlives the instance.
+struct ValidationLog {
+  std::mutex mutex;
+  std::vector<std::string> messages;
+};
+
+VKAPI_ATTR VkBool32 VKAPI_CALL KeepValidationMessage(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                     VkDebugUtilsMessageTypeFlagsEXT,
+                                                     const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+  auto* log = static_cast<ValidationLog*>(user);
+  const char* level = severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT ? "error" : "warning";
+  std::lock_guard lock(log->mutex);
+  log->messages.push_back(std::string(level) + ": " + (data && data->pMessage ? data->pMessage : "(no text)"));
+  return VK_FALSE;  // the call itself goes on
+}
+
+VkDebugUtilsMessengerCreateInfoEXT MessengerInfo(ValidationLog* log) {
+  VkDebugUtilsMessengerCreateInfoEXT info{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+  info.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+  info.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                     VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+  info.pfnUserCallback = KeepValidationMessage;
+  info.pUserData = log;
+  return info;
+}
+
 struct Instance {
   VkInstance handle = VK_NULL_HANDLE;
+  bool validation = false;  // the layer and its messenger extension are enabled
   std::string error;
 };
 
-Instance CreateInstance(bool validation) {
+bool HasValidationLayer() {
+  std::uint32_t n = 0;
+  vkEnumerateInstanceLayerProperties(&n, nullptr);
+  std::vector<VkLayerProperties> available(n);
+  vkEnumerateInstanceLayerProperties(&n, available.data());
+  for (const auto& l : available)
+    if (std::strcmp(l.layerName, "VK_LAYER_KHRONOS_validation") == 0) return true;
+  return false;
+}
+
+// `log` non-null: validation when the layer is installed (silently without).
+Instance CreateInstance(ValidationLog* log) {
   Instance out;
   VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
   app.pApplicationName = "shimmer";
   app.apiVersion = VK_API_VERSION_1_2;
-  std::vector<const char*> layers;
-  if (validation) {
-    std::uint32_t n = 0;
-    vkEnumerateInstanceLayerProperties(&n, nullptr);
-    std::vector<VkLayerProperties> available(n);
-    vkEnumerateInstanceLayerProperties(&n, available.data());
-    for (const auto& l : available)
-      if (std::strcmp(l.layerName, "VK_LAYER_KHRONOS_validation") == 0) layers.push_back("VK_LAYER_KHRONOS_validation");
-  }
+  std::vector<const char*> layers, extensions;
+  out.validation = log && HasValidationLayer();
+  VkDebugUtilsMessengerCreateInfoEXT messenger = MessengerInfo(log);
   VkInstanceCreateInfo ci{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+  if (out.validation) {
+    layers.push_back("VK_LAYER_KHRONOS_validation");
+    extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);  // provided by the layer
+    ci.pNext = &messenger;  // also reports on vkCreateInstance/vkDestroyInstance
+  }
   ci.pApplicationInfo = &app;
   ci.enabledLayerCount = static_cast<std::uint32_t>(layers.size());
   ci.ppEnabledLayerNames = layers.data();
+  ci.enabledExtensionCount = static_cast<std::uint32_t>(extensions.size());
+  ci.ppEnabledExtensionNames = extensions.data();
   VkResult r = vkCreateInstance(&ci, nullptr, &out.handle);
   if (r != VK_SUCCESS) {
     out.handle = VK_NULL_HANDLE;
@@ -175,7 +216,12 @@ struct Context::Impl {
   VkCommandBuffer cmd = VK_NULL_HANDLE;
   VkFence fence = VK_NULL_HANDLE;
   VkQueryPool queries = VK_NULL_HANDLE;
+  VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+  ValidationLog validation_log;
+  bool validation = false;
   bool lost = false;
+  int dispatches = 0;
+  int lose_device_after = -1;
 
   ~Impl() {
     if (device) {
@@ -185,12 +231,17 @@ struct Context::Impl {
       if (pool) vkDestroyCommandPool(device, pool, nullptr);
       vkDestroyDevice(device, nullptr);
     }
+    if (messenger) {
+      auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+          vkGetInstanceProcAddr(instance, "vkDestroyDebugUtilsMessengerEXT"));
+      if (destroy) destroy(instance, messenger, nullptr);
+    }
     if (instance) vkDestroyInstance(instance, nullptr);
   }
 };
 
 std::vector<DeviceInfo> Context::ListDevices(std::string* error) {
-  Instance inst = CreateInstance(false);
+  Instance inst = CreateInstance(nullptr);
   std::vector<DeviceInfo> out;
   if (!inst.handle) {
     if (error) *error = inst.error;
@@ -206,12 +257,20 @@ Expected<Context> Context::Create(const ContextOptions& options) {
   std::unique_ptr<Context> ctx(new Context());
   ctx->impl_ = std::make_unique<Impl>();
   Impl& c = *ctx->impl_;
-  Instance inst = CreateInstance(options.validation);
+  Instance inst = CreateInstance(options.validation ? &c.validation_log : nullptr);
   if (!inst.handle) {
     out.error = inst.error;
     return out;
   }
   c.instance = inst.handle;
+  c.validation = inst.validation;
+  c.lose_device_after = options.lose_device_after_dispatches;
+  if (c.validation) {
+    auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+        vkGetInstanceProcAddr(c.instance, "vkCreateDebugUtilsMessengerEXT"));
+    VkDebugUtilsMessengerCreateInfoEXT info = MessengerInfo(&c.validation_log);
+    if (!create || create(c.instance, &info, nullptr, &c.messenger) != VK_SUCCESS) c.validation = false;
+  }
   std::vector<VkPhysicalDevice> devices = UsableDevices(c.instance);
   if (devices.empty()) {
     out.error = "no Vulkan 1.2 device with a compute queue was found (install Mesa lavapipe: mesa-vulkan-drivers)";
@@ -279,6 +338,13 @@ Expected<Context> Context::Create(const ContextOptions& options) {
 }
 
 Context::~Context() = default;
+
+bool Context::validation_active() const { return impl_->validation; }
+
+std::vector<std::string> Context::TakeValidationMessages() {
+  std::lock_guard lock(impl_->validation_log.mutex);
+  return std::exchange(impl_->validation_log.messages, {});
+}
 
 Expected<Buffer> Context::CreateBuffer(std::size_t bytes, BufferKind kind) {
   Expected<Buffer> out;
@@ -468,6 +534,7 @@ DispatchResult Context::Dispatch(ComputePipeline& pipeline, std::span<Buffer* co
   auto start = std::chrono::steady_clock::now();
   VkResult r = vkQueueSubmit(c.queue, 1, &submit, c.fence);
   if (r == VK_SUCCESS) r = vkWaitForFences(c.device, 1, &c.fence, VK_TRUE, UINT64_MAX);
+  if (c.lose_device_after >= 0 && c.dispatches++ >= c.lose_device_after) r = VK_ERROR_DEVICE_LOST;
   auto stop = std::chrono::steady_clock::now();
   vkResetFences(c.device, 1, &c.fence);
   if (r != VK_SUCCESS) {

@@ -39,7 +39,13 @@ enum class BufferKind { kStorage, kUniform };
 
 struct ContextOptions {
   std::string device_name;  // substring of the device name; empty: prefer a discrete GPU
-  bool validation = false;  // enable VK_LAYER_KHRONOS_validation when installed
+  // VK_LAYER_KHRONOS_validation when installed, with a messenger that keeps
+  // its warnings and errors (Context::TakeValidationMessages).
+  bool validation = false;
+  // Fault injection for tests: every dispatch after this many reports
+  // VK_ERROR_DEVICE_LOST, as a reset or hung GPU does; lavapipe never loses
+  // its device, so the handling would otherwise go untested. -1: never.
+  int lose_device_after_dispatches = -1;
 };
 
 class Context;
@@ -91,6 +97,10 @@ class Context {
   Context& operator=(const Context&) = delete;
 
   const DeviceInfo& device() const { return info_; }
+  // Whether the validation layer was asked for and is loaded.
+  bool validation_active() const;
+  // The layer's warnings and errors since the last call, oldest first.
+  std::vector<std::string> TakeValidationMessages();
 
   Expected<Buffer> CreateBuffer(std::size_t bytes, BufferKind kind = BufferKind::kStorage);
   // A compute pipeline over buffers of the given kinds at bindings 0..n-1,

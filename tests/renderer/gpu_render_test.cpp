@@ -7,6 +7,7 @@
 #include <OpenEXR/ImfInputFile.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -269,6 +270,67 @@ TEST(GpuSequence, WritesExrLayersAndSequenceJson) {
   for (const auto& e : fs::directory_iterator(dir))  // no temporaries left behind
     EXPECT_TRUE(e.path().extension() == ".json" || e.path().extension() == ".exr") << e.path();
   fs::remove_all(dir);
+}
+
+// A device lost mid-sequence (injected: lavapipe never loses its device)
+// ends the render with one message; the frames before it are whole EXRs, the
+// lost frame has no file under any name, and sequence.json says "failed".
+TEST(GpuSequence, DeviceLostMidSequenceLeavesOnlyWholeFrames) {
+  namespace fs = std::filesystem;
+  fs::path dir = fs::temp_directory_path() / "shimmer_gpu_device_lost_test";
+  fs::remove_all(dir);
+  RenderSettings s = Settings("sphere", "none", DerivativeSource::kQuadFine, 24);
+  s.frames = 5;
+  s.lose_device_after_dispatches = 3;  // the warm-up dispatch, frames 0 and 1; frame 2 is lost
+  std::string error = RenderSequence(s, dir.string(), nullptr);
+  EXPECT_EQ(error, "frame 2: the GPU dispatch failed: device lost");
+  std::ifstream in(dir / "sequence.json");
+  auto seq = nlohmann::json::parse(in);
+  EXPECT_EQ(seq["status"], "failed");
+  EXPECT_EQ(seq["error"], error);
+  EXPECT_EQ(seq["frames"].size(), 2u);
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"frame_0000.exr", "frame_0001.exr", "sequence.json"}));
+  for (const char* name : {"frame_0000.exr", "frame_0001.exr"}) {
+    Imf::InputFile exr((dir / name).string().c_str());
+    EXPECT_TRUE(exr.isComplete()) << name;
+  }
+  fs::remove_all(dir);
+}
+
+// With the Khronos validation layer on, every kind of kernel the renderer
+// builds (filter variants with both derivative sources, the fixed and the
+// adaptive reference, every scene kind) renders without one message from it.
+TEST(GpuValidation, EveryKernelKindRendersWithoutLayerMessages) {
+  struct Case {
+    const char* scene;
+    const char* variant;
+    DerivativeSource derivatives;
+    int reference_spp;
+    double tolerance;
+  };
+  const Case cases[] = {{"sphere-field", "none", DerivativeSource::kQuadFine, 0, 0},
+                        {"bumpy-plane", "k16-ggx-rect-stable", DerivativeSource::kAnalytic, 0, 0},
+                        {"wires", "tk21", DerivativeSource::kQuadCoarse, 0, 0},
+                        {"sphere", "none", DerivativeSource::kAnalytic, 2, 0},
+                        {"sphere-field", "none", DerivativeSource::kAnalytic, 2, 0.05}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(std::string(c.scene) + " / " + c.variant);
+    RenderSettings s = Settings(c.scene, c.variant, c.derivatives, 24);
+    s.reference_spp = c.reference_spp;
+    s.reference_tolerance = c.tolerance;
+    s.max_rounds = 3;
+    s.validation = true;
+    auto [r, error] = Renderer::Create(s);
+    ASSERT_TRUE(r) << error;
+    if (!r->validation_active()) GTEST_SKIP() << "VK_LAYER_KHRONOS_validation is not installed";
+    for (int frame = 0; frame < 2; ++frame) {
+      Renderer::Result result = r->RenderFrame(frame);
+      EXPECT_EQ(result.error, "");
+    }
+  }
 }
 
 // Motion vectors point to where the surface point was in the previous frame.

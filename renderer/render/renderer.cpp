@@ -275,7 +275,7 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
                             "' has no subgroup quad operations in compute shaders; use --derivatives analytic"};
 
   const std::int32_t spec[] = {variant.id, static_cast<std::int32_t>(settings.derivatives), variant.spp_n,
-                               scene::SceneFeatures(settings.scene)};
+                               scene::SceneFeatures(settings.scene), static_cast<std::int32_t>(settings.material.ndf)};
   auto t1 = Clock::now();
   using vk::BufferKind;
   const BufferKind kinds[] = {BufferKind::kUniform, BufferKind::kStorage, BufferKind::kStorage, BufferKind::kStorage};

@@ -256,7 +256,18 @@ void main() {
   const int samples = SPP_N * SPP_N;
   const uint seed = pixelSeed(px);
   SampleSums sums = SampleSums(vec3(0.0), vec3(0.0), 0.0, 0.0);
-  for (int k = 0; k < (fewCandidates ? samples : 0); k++) {
+  // Samples in pairs: two independent traces in one iteration give LLVM work
+  // to interleave (the reference measured 12 % faster; fours were no better).
+  int k = 0;
+  for (; k + 1 < (fewCandidates ? samples : 0); k += 2) {
+    Ray ray0 = sampleRay(c, px, seed, k);
+    Ray ray1 = sampleRay(c, px, seed, k + 1);
+    SurfaceSample s0 = tracePixelRay(candidates, ray0, light);
+    SurfaceSample s1 = tracePixelRay(candidates, ray1, light);
+    sums = addSample(sums, k, s0, ray0, light, m, vp);
+    sums = addSample(sums, k + 1, s1, ray1, light, m, vp);
+  }
+  for (; k < (fewCandidates ? samples : 0); k++) {  // odd N x N
     Ray ray = sampleRay(c, px, seed, k);
     sums = addSample(sums, k, tracePixelRay(candidates, ray, light), ray, light, m, vp);
   }

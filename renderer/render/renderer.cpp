@@ -174,14 +174,29 @@ struct Renderer::Impl {
   std::unique_ptr<vk::Context> ctx;
   std::unique_ptr<vk::ComputePipeline> pipeline;
   std::unique_ptr<vk::Buffer> frame_buf, scene_buf, image_buf, counter_buf;
+  int band_rows = 0;  // rows the image buffer holds
 
-  // groups 0: the whole image.
-  std::string Dispatch(const GpuPush& push, double* gpu_ms, std::uint32_t groups_x = 0, std::uint32_t groups_y = 0) {
+  // Band [y0, y0 + rows) between the image buffer (channel planes of
+  // width x rows) and the frame's full-height planes.
+  void CopyBand(Frame& frame, int y0, int rows, bool to_frame) const {
+    const std::size_t w = std::size_t(settings.width), band = w * rows, full = w * settings.height;
+    auto* buffer = static_cast<float*>(image_buf->data());
+    for (int ch = 0; ch < kChannelCount; ++ch) {
+      float* in_frame = frame.planes.data() + ch * full + std::size_t(y0) * w;
+      float* in_buffer = buffer + ch * band;
+      if (to_frame)
+        std::memcpy(in_frame, in_buffer, band * sizeof(float));
+      else
+        std::memcpy(in_buffer, in_frame, band * sizeof(float));
+    }
+  }
+
+  // `columns` x `rows` pixels in 8 x 8 workgroups.
+  std::string Dispatch(const GpuPush& push, double* gpu_ms, int columns, int rows) {
     vk::Buffer* bufs[] = {frame_buf.get(), scene_buf.get(), image_buf.get(), counter_buf.get()};
     auto bytes = std::as_bytes(std::span<const GpuPush>(&push, 1));
     auto groups = [](int n) { return std::uint32_t((n + 7) / 8); };
-    vk::DispatchResult r = ctx->Dispatch(*pipeline, bufs, bytes, groups_x ? groups_x : groups(settings.width),
-                                         groups_y ? groups_y : groups(settings.height));
+    vk::DispatchResult r = ctx->Dispatch(*pipeline, bufs, bytes, groups(columns), groups(rows));
     *gpu_ms += r.gpu_ms;
     if (!r.error.empty()) return r.error;
     return ValidationError();
@@ -285,9 +300,18 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
   im.timings.pipeline_ms = MsSince(t1);
 
   im.words = scene::PackScene(settings.scene);
-  const std::size_t pixels = std::size_t(settings.width) * settings.height;
+  // Rows of all the layers that fit one storage buffer, in whole workgroups.
+  const std::size_t row_bytes = std::size_t(settings.width) * kChannelCount * sizeof(float);
+  const int fitting_rows = int(std::min<std::uint64_t>(dev.max_storage_buffer_range / row_bytes, 1 << 30)) / 8 * 8;
+  if (settings.band_rows < 0 || settings.band_rows % 8 != 0)
+    return Out{nullptr, "band rows must be a positive multiple of 8 (got " + std::to_string(settings.band_rows) + ")"};
+  if (fitting_rows == 0)
+    return Out{nullptr, "an image " + std::to_string(settings.width) + " pixels wide does not fit the device's " +
+                            std::to_string(dev.max_storage_buffer_range >> 20) + " MiB storage buffers even 8 rows at a time"};
+  im.band_rows = std::min(settings.band_rows > 0 ? std::min(settings.band_rows, fitting_rows) : fitting_rows,
+                          (settings.height + 7) / 8 * 8);
   const std::size_t bytes[] = {sizeof(GpuFrame), im.words.size() * sizeof(glm::vec4),
-                               pixels * kChannelCount * sizeof(float), 16};
+                               std::size_t(im.band_rows) * row_bytes, 16};
   std::unique_ptr<vk::Buffer>* slots[] = {&im.frame_buf, &im.scene_buf, &im.image_buf, &im.counter_buf};
   for (int i = 0; i < 4; ++i) {
     auto b = im.ctx->CreateBuffer(bytes[i], kinds[i]);
@@ -298,9 +322,7 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
 
   // Warm-up: the first dispatch includes lavapipe's JIT; keep it out of frame times.
   auto t2 = Clock::now();
-  GpuFrame empty{};
-  empty.size[0] = 0;
-  empty.size[1] = 0;
+  GpuFrame empty{};  // size 0: every invocation is outside the image
   std::memcpy(im.frame_buf->data(), &empty, sizeof empty);
   double warm_ms = 0;
   if (std::string e = im.Dispatch(GpuPush{}, &warm_ms, 1, 1); !e.empty()) return Out{nullptr, e};
@@ -326,7 +348,6 @@ Renderer::Result Renderer::RenderFrame(int index) {
   put(f.mat_albedo, s.material.albedo, 0);
   f.size[0] = s.width;
   f.size[1] = s.height;
-  std::memcpy(im.frame_buf->data(), &f, sizeof f);
 
   GpuPush push{};
   const auto& p = im.variant.params;
@@ -339,23 +360,43 @@ Renderer::Result Renderer::RenderFrame(int index) {
   const int rounds = adaptive ? std::max(1, s.max_rounds) : 1;
   Frame& frame = result.frame;
   frame.rounds = 0;
-  for (int round = 0; round < rounds; ++round) {
-    push.round[0] = round;
-    std::memset(im.counter_buf->data(), 0, 16);
-    result.error = im.Dispatch(push, &frame.gpu_ms);
-    if (!result.error.empty()) return result;
-    frame.rounds = round + 1;
-    std::uint32_t unconverged = 0;
-    std::memcpy(&unconverged, im.counter_buf->data(), sizeof unconverged);
-    if (unconverged == 0) break;
-  }
-  auto t0 = Clock::now();
   frame.width = s.width;
   frame.height = s.height;
-  const std::size_t n = std::size_t(s.width) * s.height * kChannelCount;
-  frame.planes.resize(n);
-  std::memcpy(frame.planes.data(), im.image_buf->data(), n * sizeof(float));
-  frame.readback_ms = MsSince(t0);
+  frame.planes.resize(std::size_t(s.width) * s.height * kChannelCount);
+  // One band unless the image outgrows a storage buffer. With several, each
+  // band's planes are read back after its dispatch, and an adaptive round
+  // first uploads the band's earlier rounds, which the kernel merges into.
+  const bool banded = im.band_rows < s.height;
+  auto band_rows = [&](int y0) { return std::min(im.band_rows, s.height - y0); };
+  for (int round = 0; round < rounds; ++round) {
+    push.round[0] = round;
+    std::uint32_t unconverged = 0;
+    for (int y0 = 0; y0 < s.height; y0 += im.band_rows) {
+      const int rows = band_rows(y0);
+      if (banded && round > 0) im.CopyBand(frame, y0, rows, false);
+      f.size[2] = y0;
+      f.size[3] = rows;
+      std::memcpy(im.frame_buf->data(), &f, sizeof f);
+      std::memset(im.counter_buf->data(), 0, 16);
+      result.error = im.Dispatch(push, &frame.gpu_ms, s.width, rows);
+      if (!result.error.empty()) return result;
+      std::uint32_t band_unconverged = 0;
+      std::memcpy(&band_unconverged, im.counter_buf->data(), sizeof band_unconverged);
+      unconverged += band_unconverged;
+      if (banded) {
+        auto t0 = Clock::now();
+        im.CopyBand(frame, y0, rows, true);
+        frame.readback_ms += MsSince(t0);
+      }
+    }
+    frame.rounds = round + 1;
+    if (unconverged == 0) break;
+  }
+  if (!banded) {
+    auto t0 = Clock::now();
+    im.CopyBand(frame, 0, s.height, true);
+    frame.readback_ms = MsSince(t0);
+  }
   double total = 0;
   const std::size_t pixels = std::size_t(s.width) * s.height;
   for (std::size_t i = 0; i < pixels; ++i) total += frame.planes[kSampleCount * pixels + i];

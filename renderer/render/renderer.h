@@ -65,6 +65,10 @@ struct RenderSettings {
   // render. On by default in debug builds.
   bool validation = kValidationByDefault;
   int lose_device_after_dispatches = -1;  // fault injection for tests, see vk::ContextOptions
+  // Rows per dispatch (a multiple of 8). 0: as many as the device's storage
+  // buffer range allows (lavapipe: 128 MiB, about 1.6 M pixels of all the
+  // layers); taller images render in bands of that many rows.
+  int band_rows = 0;
 };
 
 // Luminance floor of the adaptive reference's relative error (dark pixels

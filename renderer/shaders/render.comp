@@ -41,7 +41,7 @@ layout(std140, binding = 0) uniform FrameBuf {
   vec4 matA;    // alpha x, alpha y, ndf (the kernel reads MATERIAL_NDF instead)
   vec4 matF0;
   vec4 matAlbedo;
-  ivec4 size;   // width, height
+  ivec4 size;   // width, height, first row and row count of this dispatch's band
 } frame;
 layout(std430, binding = 1) readonly buffer SceneBuf { vec4 words[]; } scene;
 layout(std430, binding = 2) buffer ImageBuf { float values[]; } image;  // planar channels
@@ -84,7 +84,9 @@ Camera loadCamera(CameraGpu g) {
   return c;
 }
 
-int planeSize() { return frame.size.x * frame.size.y; }
+// The image buffer holds one band of rows (the whole image when it fits the
+// device's storage-buffer range), channel planes of width x band rows.
+int planeSize() { return frame.size.x * frame.size.w; }
 void put(int ch, int idx, float v) { image.values[ch * planeSize() + idx] = v; }
 float get(int ch, int idx) { return image.values[ch * planeSize() + idx]; }
 void put3(int ch, int idx, vec3 v) { put(ch, idx, v.x); put(ch + 1, idx, v.y); put(ch + 2, idx, v.z); }
@@ -180,10 +182,12 @@ void main() {
   uint lin = gl_SubgroupID * gl_SubgroupSize + gl_SubgroupInvocationID;
   uint quad = lin >> 2u;
   uint lane = lin & 3u;
-  ivec2 px = ivec2(gl_WorkGroupID.xy) * 8 +
+  // Bands start on multiples of 8 rows, so a pixel's quad and workgroup lanes
+  // are the same as in one dispatch over the whole image.
+  ivec2 px = ivec2(gl_WorkGroupID.xy) * 8 + ivec2(0, frame.size.z) +
              ivec2(int((quad & 3u) * 2u + (lane & 1u)), int((quad >> 2u) * 2u + (lane >> 1u)));
   bool inside = px.x < frame.size.x && px.y < frame.size.y;
-  int idx = px.y * frame.size.x + px.x;
+  int idx = (px.y - frame.size.z) * frame.size.x + px.x;
 
   Camera c = loadCamera(frame.cam);
   Camera prev = loadCamera(frame.prevCam);

@@ -289,28 +289,37 @@ TEST(GpuSequence, WritesExrLayersAndSequenceJson) {
   fs::remove_all(dir);
 }
 
+// One of each kind of kernel the renderer builds: filter variants with each
+// derivative source, the fixed and the adaptive reference, every scene kind.
+struct KernelKind {
+  const char* scene;
+  const char* variant;
+  DerivativeSource derivatives;
+  int reference_spp;
+  double tolerance;
+  std::string Name() const { return std::string(scene) + " / " + variant; }
+  RenderSettings Settings(int size) const {
+    RenderSettings s = shimmer::render::Settings(scene, variant, derivatives, size);
+    s.reference_spp = reference_spp;
+    s.reference_tolerance = tolerance;
+    return s;
+  }
+};
+const KernelKind kKernelKinds[] = {{"sphere-field", "none", DerivativeSource::kQuadFine, 0, 0},
+                                   {"bumpy-plane", "k16-ggx-rect-stable", DerivativeSource::kAnalytic, 0, 0},
+                                   {"wires", "tk21", DerivativeSource::kQuadCoarse, 0, 0},
+                                   {"sphere", "none", DerivativeSource::kAnalytic, 2, 0},
+                                   {"sphere-field", "none", DerivativeSource::kAnalytic, 2, 0.02}};
+
 // Images taller than a storage buffer holds render in bands of rows; a band
 // starts on a multiple of 8 rows, so every pixel sees the same quad, lanes and
 // samples as in one dispatch, and an adaptive round merges into the band's
 // earlier rounds: the frame must be the same bit for bit.
 TEST(GpuRender, BandsOfRowsGiveTheFrameOfOneDispatch) {
-  struct Case {
-    const char* scene;
-    const char* variant;
-    DerivativeSource derivatives;
-    int reference_spp;
-    double tolerance;
-  };
-  const Case cases[] = {{"sphere-field", "none", DerivativeSource::kQuadFine, 0, 0},
-                        {"bumpy-plane", "tk21", DerivativeSource::kAnalytic, 0, 0},
-                        {"sphere", "none", DerivativeSource::kAnalytic, 2, 0},
-                        {"sphere-field", "none", DerivativeSource::kAnalytic, 2, 0.02}};
-  for (const Case& c : cases) {
-    SCOPED_TRACE(std::string(c.scene) + " / " + c.variant);
-    RenderSettings s = Settings(c.scene, c.variant, c.derivatives, 40);
+  for (const KernelKind& k : kKernelKinds) {
+    SCOPED_TRACE(k.Name());
+    RenderSettings s = k.Settings(40);
     s.height = 36;  // the last band is partial
-    s.reference_spp = c.reference_spp;
-    s.reference_tolerance = c.tolerance;
     s.max_rounds = 4;
     Frame whole = RenderOne(s, 3);
     for (int rows : {8, 16}) {
@@ -323,7 +332,7 @@ TEST(GpuRender, BandsOfRowsGiveTheFrameOfOneDispatch) {
         differing += std::memcmp(&banded.planes[i], &whole.planes[i], sizeof(float)) != 0;
       EXPECT_EQ(differing, 0u) << rows << " rows a band";
     }
-    if (c.tolerance > 0) EXPECT_GT(whole.rounds, 1);  // the merge across rounds was exercised
+    if (k.tolerance > 0) EXPECT_GT(whole.rounds, 1);  // the merge across rounds was exercised
   }
 }
 
@@ -376,23 +385,9 @@ TEST(GpuSequence, DeviceLostMidSequenceLeavesOnlyWholeFrames) {
 // builds (filter variants with both derivative sources, the fixed and the
 // adaptive reference, every scene kind) renders without one message from it.
 TEST(GpuValidation, EveryKernelKindRendersWithoutLayerMessages) {
-  struct Case {
-    const char* scene;
-    const char* variant;
-    DerivativeSource derivatives;
-    int reference_spp;
-    double tolerance;
-  };
-  const Case cases[] = {{"sphere-field", "none", DerivativeSource::kQuadFine, 0, 0},
-                        {"bumpy-plane", "k16-ggx-rect-stable", DerivativeSource::kAnalytic, 0, 0},
-                        {"wires", "tk21", DerivativeSource::kQuadCoarse, 0, 0},
-                        {"sphere", "none", DerivativeSource::kAnalytic, 2, 0},
-                        {"sphere-field", "none", DerivativeSource::kAnalytic, 2, 0.05}};
-  for (const Case& c : cases) {
-    SCOPED_TRACE(std::string(c.scene) + " / " + c.variant);
-    RenderSettings s = Settings(c.scene, c.variant, c.derivatives, 24);
-    s.reference_spp = c.reference_spp;
-    s.reference_tolerance = c.tolerance;
+  for (const KernelKind& k : kKernelKinds) {
+    SCOPED_TRACE(k.Name());
+    RenderSettings s = k.Settings(24);
     s.max_rounds = 3;
     s.validation = true;
     auto [r, error] = Renderer::Create(s);

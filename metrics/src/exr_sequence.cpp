@@ -10,6 +10,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 
 #include <nlohmann/json.hpp>
@@ -81,11 +82,11 @@ std::string Join(const std::vector<std::string>& items) {
   return out.empty() ? "none" : out;
 }
 
-// Size of the part that holds `layer`; all parts of a frame must agree on it.
-struct DataWindow {
-  int min_x = 0, min_y = 0, width = 0, height = 0;
+// A frame's size is its first part's data window; every part must agree.
+struct FrameSize {
+  int width = 0, height = 0;
 };
-DataWindow WindowOf(const detail::ExrPartInfo& part) { return {part.min_x, part.min_y, part.width, part.height}; }
+FrameSize SizeOf(const detail::ExrPartInfo& part) { return {part.width, part.height}; }
 
 Result<std::vector<fs::path>> ListExrFiles(const fs::path& dir) {
   std::error_code ec;
@@ -103,12 +104,12 @@ Result<std::vector<fs::path>> ListExrFiles(const fs::path& dir) {
 }
 
 // Header-level check of one frame: opens it, maps its layers.
-Result<LayerMap> ReadLayerMap(const fs::path& file, DataWindow* window) {
+Result<LayerMap> ReadLayerMap(const fs::path& file, FrameSize* size) {
   auto in = ExrInput::Open(file);
   if (!in) return Result<LayerMap>::Failure(in.error());
   for (const detail::ExrPartInfo& part : in->parts())
     if (part.deep) return Result<LayerMap>::Failure(file.string() + ": deep EXR images are not supported");
-  if (window) *window = WindowOf(in->parts().front());
+  if (size) *size = SizeOf(in->parts().front());
   return MapLayers(*in);
 }
 
@@ -118,11 +119,11 @@ struct FrameCheck {
   bool motion = false;
 };
 FrameCheck CheckFrame(const fs::path& frame, const ExrSequence& seq) {
-  DataWindow window;
-  auto layers = ReadLayerMap(frame, &window);
+  FrameSize size;
+  auto layers = ReadLayerMap(frame, &size);
   if (!layers) return {layers.error()};
-  if (window.width != seq.width || window.height != seq.height)
-    return {frame.string() + ": frame is " + std::to_string(window.width) + "x" + std::to_string(window.height) +
+  if (size.width != seq.width || size.height != seq.height)
+    return {frame.string() + ": frame is " + std::to_string(size.width) + "x" + std::to_string(size.height) +
             " but " + seq.frames[0].filename().string() + " is " + std::to_string(seq.width) + "x" +
             std::to_string(seq.height)};
   auto it = layers->find(seq.layer);
@@ -218,7 +219,7 @@ Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& re
   }
 
   // Frame 0 decides the layer and size; every other frame must match it.
-  DataWindow first;
+  FrameSize first;
   auto layers0 = ReadLayerMap(seq.frames[0], &first);
   if (!layers0) return R::Failure(layers0.error());
   seq.layers = LuminanceLayers(*layers0);
@@ -330,7 +331,7 @@ Result<cv::Mat> ReadMask(const fs::path& file, int width, int height) {
     if (layer.empty()) return R::Failure(file.string() + ": mask EXR has no R,G,B or Y channels");
     auto in = ExrInput::Open(file);
     if (!in) return R::Failure(in.error());
-    DataWindow w = WindowOf(in->parts().front());
+    FrameSize w = SizeOf(in->parts().front());
     if (w.width != width || w.height != height)
       return R::Failure(file.string() + ": mask is " + std::to_string(w.width) + "x" + std::to_string(w.height) +
                         " but the frames are " + std::to_string(width) + "x" + std::to_string(height));

@@ -307,7 +307,8 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
     return Out{nullptr, "band rows must be a positive multiple of 8 (got " + std::to_string(settings.band_rows) + ")"};
   if (fitting_rows == 0)
     return Out{nullptr, "an image " + std::to_string(settings.width) + " pixels wide does not fit the device's " +
-                            std::to_string(dev.max_storage_buffer_range >> 20) + " MiB storage buffers even 8 rows at a time"};
+                            std::to_string(dev.max_storage_buffer_range >> 20) +
+                            " MiB storage buffers even 8 rows at a time"};
   im.band_rows = std::min(settings.band_rows > 0 ? std::min(settings.band_rows, fitting_rows) : fitting_rows,
                           (settings.height + 7) / 8 * 8);
   const std::size_t bytes[] = {sizeof(GpuFrame), im.words.size() * sizeof(glm::vec4),

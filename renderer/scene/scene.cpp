@@ -174,8 +174,7 @@ Box Bounds(const Primitive& p) {
 struct BvhNode {
   Box box;
   int skip = 0;    // the node after this subtree
-  int first = 0;   // first primitive (leaves)
-  int count = 0;   // 0: interior
+  int prim = -1;   // a leaf's one primitive; -1: interior
 };
 
 // Median split on the widest centroid axis, nodes appended in depth-first
@@ -193,8 +192,7 @@ void BuildNode(std::vector<BvhNode>& nodes, std::vector<int>& order, int begin, 
   }
   nodes[index].box = box;
   if (end - begin == 1) {
-    nodes[index].first = begin;
-    nodes[index].count = 1;
+    nodes[index].prim = begin;
   } else {
     glm::dvec3 ext = centroids.hi - centroids.lo;
     int axis = ext.x > ext.y ? (ext.x > ext.z ? 0 : 2) : (ext.y > ext.z ? 1 : 2);
@@ -420,8 +418,7 @@ std::vector<glm::vec4> PackScene(const Scene& scene) {
   words.push_back({float(bounded.size()), float(nodes.size()), float(first_prim_word), float(unbounded.size())});
   for (const BvhNode& n : nodes) {
     words.push_back({float(n.box.lo.x), float(n.box.lo.y), float(n.box.lo.z), float(n.skip)});
-    words.push_back({float(n.box.hi.x), float(n.box.hi.y), float(n.box.hi.z),
-                     float(n.count > 0 ? n.first + 1 : 0)});
+    words.push_back({float(n.box.hi.x), float(n.box.hi.y), float(n.box.hi.z), float(n.prim + 1)});  // 0: interior
   }
   auto push = [&words](const Primitive& p) {
     words.push_back(PrimWord0(p));

@@ -5,6 +5,7 @@
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfThreading.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -406,6 +407,12 @@ Renderer::Result Renderer::RenderFrame(int index) {
 }
 
 std::string WriteExr(const std::string& path, const Frame& frame, bool with_stderr) {
+  // ZIP-compressing the 16-line blocks is most of a frame's write: OpenEXR
+  // compresses them on its thread pool when it has one.
+  static std::once_flag pool;
+  std::call_once(pool, [] {
+    Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+  });
   const std::string tmp = path + ".tmp";
   try {
     Imf::Header header(frame.width, frame.height);

@@ -38,6 +38,7 @@ std::string SettingsFor(const Job& job, const RunOptions& options, render::Rende
                    : job.derivatives == "quad-coarse" ? shading::DerivativeSource::kQuadCoarse
                                                       : shading::DerivativeSource::kQuadFine;
   s->device = options.device;
+  s->compress_exr = options.keep_frames;  // else measured once and deleted
   return "";
 }
 

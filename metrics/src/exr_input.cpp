@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstring>
+#include <fstream>
 #include <mutex>
 #include <thread>
 
@@ -21,7 +23,8 @@ namespace fs = std::filesystem;
 struct ExrInput::Context {
   exr_context_t exr = nullptr;
   std::mutex mutex;
-  std::string message;  // OpenEXR's own wording of the first error
+  std::string message;        // OpenEXR's own wording of the first error
+  std::vector<char> bytes;    // the whole file, when read in one go
 
   ~Context() {
     if (exr) exr_finish(&exr);
@@ -46,6 +49,20 @@ namespace {
 void RecordError(exr_const_context_t exr, exr_result_t, const char* text) {
   void* user = nullptr;
   if (exr_get_user_data(exr, &user) == EXR_ERR_SUCCESS && user) static_cast<ExrInput::Context*>(user)->Record(text);
+}
+
+// pread semantics over the file's bytes in memory: a short count at the end.
+int64_t ReadFromMemory(exr_const_context_t, void* user, void* buffer, uint64_t size, uint64_t offset,
+                       exr_stream_error_func_ptr_t) {
+  const std::vector<char>& bytes = static_cast<ExrInput::Context*>(user)->bytes;
+  if (offset >= bytes.size()) return 0;
+  const uint64_t n = std::min<uint64_t>(size, bytes.size() - offset);
+  std::memcpy(buffer, bytes.data() + offset, n);
+  return static_cast<int64_t>(n);
+}
+
+int64_t MemorySize(exr_const_context_t, void* user) {
+  return static_cast<int64_t>(static_cast<ExrInput::Context*>(user)->bytes.size());
 }
 
 std::string Unreadable(const fs::path& file, const std::string& why) {
@@ -91,7 +108,7 @@ Status ReadWithImf(const fs::path& file, int part, const ExrPartInfo& info,
 
 }  // namespace
 
-Result<ExrInput> ExrInput::Open(const fs::path& file) {
+Result<ExrInput> ExrInput::Open(const fs::path& file, bool whole_file) {
   using R = Result<ExrInput>;
   ExrInput input;
   input.file_ = file;
@@ -100,6 +117,16 @@ Result<ExrInput> ExrInput::Open(const fs::path& file) {
   exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
   init.error_handler_fn = RecordError;
   init.user_data = &context;
+  if (whole_file) {
+    std::ifstream in(file, std::ios::binary | std::ios::ate);
+    if (!in) return R::Failure(Unreadable(file, "cannot open it"));
+    context.bytes.resize(static_cast<size_t>(in.tellg()));
+    in.seekg(0);
+    if (!in.read(context.bytes.data(), static_cast<std::streamsize>(context.bytes.size())))
+      return R::Failure(Unreadable(file, "cannot read it"));
+    init.read_fn = ReadFromMemory;
+    init.size_fn = MemorySize;
+  }
   if (exr_result_t rv = exr_start_read(&context.exr, file.c_str(), &init); rv != EXR_ERR_SUCCESS)
     return R::Failure(Unreadable(file, context.Describe(rv)));
 

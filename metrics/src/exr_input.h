@@ -39,8 +39,12 @@ struct ExrPlaneRequest {
 
 class ExrInput {
  public:
-  // Reads the headers; fails with a message naming the file.
-  static Result<ExrInput> Open(const std::filesystem::path& file);
+  // Reads the headers; fails with a message naming the file. With
+  // `whole_file`, the file is read into memory in one go first and the
+  // chunks are served from there: OpenEXR otherwise issues one pread per
+  // chunk, and an uncompressed file has a chunk per scanline (a system call
+  // costs microseconds in a virtual machine).
+  static Result<ExrInput> Open(const std::filesystem::path& file, bool whole_file = false);
 
   const std::vector<ExrPartInfo>& parts() const { return parts_; }
 

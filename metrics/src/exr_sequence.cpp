@@ -253,7 +253,7 @@ Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& re
 
 Result<Frame> ReadFrame(const fs::path& file, const std::string& layer, int width, int height, bool with_motion) {
   using R = Result<Frame>;
-  auto in = ExrInput::Open(file);
+  auto in = ExrInput::Open(file, /*whole_file=*/true);
   if (!in) return R::Failure(in.error());
   LayerMap layers = MapLayers(*in);
   auto it = layers.find(layer);

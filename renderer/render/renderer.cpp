@@ -73,6 +73,25 @@ SpirvCache& Cache() {
   return cache;
 }
 
+// Vulkan devices and compute pipelines shared by the renderers of a process.
+// Creating a pipeline is where lavapipe runs LLVM (350-800 ms), most of a
+// short experiment job, and jobs that differ only in parameters (push
+// constants) or material values compile the same pipeline. Never destroyed:
+// tearing Vulkan down from static destructors would race the driver's own
+// teardown, and the OS reclaims everything at exit.
+struct SharedDevice {
+  std::shared_ptr<vk::Context> ctx;
+  std::map<std::pair<std::string, std::vector<std::int32_t>>, std::shared_ptr<vk::ComputePipeline>> pipelines;
+};
+struct DeviceCache {
+  std::mutex mutex;
+  std::map<std::pair<std::string, bool>, SharedDevice> devices;  // (device name, validation)
+};
+DeviceCache& Devices() {
+  static auto* cache = new DeviceCache;
+  return *cache;
+}
+
 std::string KernelText(bool user_variant) {
   std::string text;
   for (const auto& [name, body] : embedded::Sources())
@@ -172,8 +191,8 @@ struct Renderer::Impl {
   ResolvedVariant variant;
   Timings timings;
   std::vector<glm::vec4> words;
-  std::unique_ptr<vk::Context> ctx;
-  std::unique_ptr<vk::ComputePipeline> pipeline;
+  std::shared_ptr<vk::Context> ctx;
+  std::shared_ptr<vk::ComputePipeline> pipeline;
   std::unique_ptr<vk::Buffer> frame_buf, scene_buf, image_buf, counter_buf;
   int band_rows = 0;  // rows the image buffer holds
 
@@ -255,10 +274,10 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
     extra.push_back({"user_variant.glsl", user_text});
   }
   std::vector<std::uint32_t> spirv;
+  const std::string key = settings.variant_file.empty() ? std::string() : "user:" + user_text;
   {
     auto t0 = Clock::now();
     std::lock_guard<std::mutex> lock(Cache().mutex);
-    const std::string key = settings.variant_file.empty() ? std::string() : "user:" + user_text;
     auto it = Cache().modules.find(key);
     if (it == Cache().modules.end()) {
       shading::SpirvResult compiled = shading::CompileCompute({"render.comp", KernelText(!extra.empty())}, extra);
@@ -281,9 +300,21 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
   options.device_name = settings.device;
   options.validation = settings.validation;
   options.lose_device_after_dispatches = settings.lose_device_after_dispatches;
-  vk::Expected<vk::Context> ctx = vk::Context::Create(options);
-  if (!ctx) return Out{nullptr, ctx.error};
-  im.ctx = std::move(ctx.value);
+  // A device with an injected loss is this renderer's alone.
+  const bool shared = settings.lose_device_after_dispatches < 0;
+  std::unique_lock<std::mutex> devices_lock(Devices().mutex, std::defer_lock);
+  SharedDevice private_device;
+  SharedDevice* device = &private_device;
+  if (shared) {
+    devices_lock.lock();
+    device = &Devices().devices[{settings.device, settings.validation}];
+  }
+  if (!device->ctx) {
+    vk::Expected<vk::Context> ctx = vk::Context::Create(options);
+    if (!ctx) return Out{nullptr, ctx.error};
+    device->ctx = std::move(ctx.value);
+  }
+  im.ctx = device->ctx;
   const vk::DeviceInfo& dev = im.ctx->device();
   if (variant.spp_n == 1 && settings.derivatives != shading::DerivativeSource::kAnalytic &&
       (!dev.quad_ops_in_compute || dev.subgroup_size < 4))
@@ -295,10 +326,16 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
   auto t1 = Clock::now();
   using vk::BufferKind;
   const BufferKind kinds[] = {BufferKind::kUniform, BufferKind::kStorage, BufferKind::kStorage, BufferKind::kStorage};
-  auto pipe = im.ctx->CreatePipeline(spirv, spec, kinds, sizeof(GpuPush));
-  if (!pipe) return Out{nullptr, pipe.error};
-  im.pipeline = std::move(pipe.value);
-  im.timings.pipeline_ms = MsSince(t1);
+  std::shared_ptr<vk::ComputePipeline>& pipeline =
+      device->pipelines[{key, std::vector<std::int32_t>(std::begin(spec), std::end(spec))}];
+  if (!pipeline) {
+    auto pipe = im.ctx->CreatePipeline(spirv, spec, kinds, sizeof(GpuPush));
+    if (!pipe) return Out{nullptr, pipe.error};
+    pipeline = std::move(pipe.value);
+    im.timings.pipeline_ms = MsSince(t1);
+  }
+  im.pipeline = pipeline;
+  if (devices_lock.owns_lock()) devices_lock.unlock();
 
   im.words = scene::PackScene(settings.scene);
   // Rows of all the layers that fit one storage buffer, in whole workgroups.
@@ -406,7 +443,7 @@ Renderer::Result Renderer::RenderFrame(int index) {
   return result;
 }
 
-std::string WriteExr(const std::string& path, const Frame& frame, bool with_stderr) {
+std::string WriteExr(const std::string& path, const Frame& frame, bool with_stderr, bool compress) {
   // ZIP-compressing the 16-line blocks is most of a frame's write: OpenEXR
   // compresses them on its thread pool when it has one.
   static std::once_flag pool;
@@ -416,7 +453,7 @@ std::string WriteExr(const std::string& path, const Frame& frame, bool with_stde
   const std::string tmp = path + ".tmp";
   try {
     Imf::Header header(frame.width, frame.height);
-    header.compression() = Imf::ZIP_COMPRESSION;
+    header.compression() = compress ? Imf::ZIP_COMPRESSION : Imf::NO_COMPRESSION;
     Imf::FrameBuffer fb;
     const std::size_t plane = std::size_t(frame.width) * frame.height;
     for (const ExrChannel& c : ExrChannels(with_stderr)) {
@@ -484,7 +521,8 @@ std::string WriteJsonAtomically(const std::string& path, const nlohmann::json& j
 // EXR writing on a worker thread, at most two frames queued.
 class FrameWriter {
  public:
-  explicit FrameWriter(bool with_stderr) : with_stderr_(with_stderr), thread_([this] { Loop(); }) {}
+  FrameWriter(bool with_stderr, bool compress)
+      : with_stderr_(with_stderr), compress_(compress), thread_([this] { Loop(); }) {}
   ~FrameWriter() { Finish(); }
 
   void Push(std::string path, Frame frame) {
@@ -518,13 +556,14 @@ class FrameWriter {
         space_.notify_one();
       }
       auto t0 = Clock::now();
-      std::string e = error_.empty() ? WriteExr(job.first, job.second, with_stderr_) : "";
+      std::string e = error_.empty() ? WriteExr(job.first, job.second, with_stderr_, compress_) : "";
       write_ms_ += MsSince(t0);
       if (!e.empty() && error_.empty()) error_ = e;
     }
   }
 
   bool with_stderr_;
+  bool compress_;
   std::mutex mutex_;
   std::condition_variable ready_, space_;
   std::deque<std::pair<std::string, Frame>> queue_;
@@ -601,7 +640,7 @@ std::string RenderSequence(const RenderSettings& settings, const std::string& ou
   if (!settings.variant_file.empty()) seq["variant_file"] = settings.variant_file;
   if (std::string e = WriteJsonAtomically(seq_path, seq); !e.empty()) return e;
 
-  FrameWriter writer(v.reference);
+  FrameWriter writer(v.reference, settings.compress_exr);
   double render_ms = 0, readback_ms = 0;
   for (int i = 0; i < settings.frames; ++i) {
     auto t0 = Clock::now();

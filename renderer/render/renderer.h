@@ -69,6 +69,9 @@ struct RenderSettings {
   // buffer range allows (lavapipe: 128 MiB, about 1.6 M pixels of all the
   // layers); taller images render in bands of that many rows.
   int band_rows = 0;
+  // ZIP for frames people keep; none for frames measured once and deleted
+  // (the experiment runner's): zlib then costs more than the rendering.
+  bool compress_exr = true;
 };
 
 // Luminance floor of the adaptive reference's relative error (dark pixels
@@ -146,7 +149,8 @@ std::string RenderSequence(const RenderSettings& settings, const std::string& ou
 // Writes a tone-mapped (x / (1 + x), sRGB) 8-bit PNG of the beauty layer.
 std::string WritePreviewPng(const std::string& path, const Frame& frame);
 
-// Writes one frame as float EXR to path (through path.tmp and a rename).
-std::string WriteExr(const std::string& path, const Frame& frame, bool with_stderr);
+// Writes one frame as float EXR to path (through path.tmp and a rename),
+// ZIP-compressed or not.
+std::string WriteExr(const std::string& path, const Frame& frame, bool with_stderr, bool compress = true);
 
 }  // namespace shimmer::render

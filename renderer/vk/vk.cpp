@@ -219,6 +219,7 @@ struct Context::Impl {
   VkQueryPool queries = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
   ValidationLog validation_log;
+  std::mutex dispatch_mutex;  // the one command buffer, fence and query pool, and descriptor updates
   bool validation = false;
   bool lost = false;
   int dispatches = 0;
@@ -483,6 +484,7 @@ DispatchResult Context::Dispatch(ComputePipeline& pipeline, std::span<Buffer* co
   DispatchResult result;
   Impl& c = *impl_;
   ComputePipeline::Impl& pi = *pipeline.impl_;
+  std::lock_guard lock(c.dispatch_mutex);
   if (c.lost) {
     result.error = "device lost";
     return result;

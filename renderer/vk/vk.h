@@ -108,7 +108,8 @@ class Context {
   Expected<ComputePipeline> CreatePipeline(std::span<const std::uint32_t> spirv,
                                            std::span<const std::int32_t> specialization,
                                            std::span<const BufferKind> bindings, std::uint32_t push_bytes);
-  // Records, submits and waits for one dispatch of groups_x * groups_y workgroups.
+  // Records, submits and waits for one dispatch of groups_x * groups_y
+  // workgroups. Thread-safe: dispatches from several threads run one at a time.
   DispatchResult Dispatch(ComputePipeline& pipeline, std::span<Buffer* const> buffers,
                           std::span<const std::byte> push, std::uint32_t groups_x, std::uint32_t groups_y);
 

@@ -332,7 +332,9 @@ TEST(GpuRender, BandsOfRowsGiveTheFrameOfOneDispatch) {
         differing += std::memcmp(&banded.planes[i], &whole.planes[i], sizeof(float)) != 0;
       EXPECT_EQ(differing, 0u) << rows << " rows a band";
     }
-    if (k.tolerance > 0) EXPECT_GT(whole.rounds, 1);  // the merge across rounds was exercised
+    if (k.tolerance > 0) {
+      EXPECT_GT(whole.rounds, 1);  // the merge across rounds was exercised
+    }
   }
 }
 

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "renderer.h"
 #include "scene.h"
@@ -353,6 +354,38 @@ TEST(GpuRender, ImageLargerThanAStorageBufferRenders) {
   EXPECT_GT(hits_top, 0);
   EXPECT_GT(hits_bottom, 0);
   EXPECT_EQ(f.at(kSampleCount, 1599, 1099), 1.0f);
+}
+
+// Renderers of one process share the device and, when only parameters or
+// material values differ, the compiled pipeline. Each must still render with
+// its own parameters and buffers, also when two render at once.
+TEST(GpuRender, RenderersSharingAPipelineKeepTheirOwnParameters) {
+  RenderSettings a = Settings("sphere-field", "k16-beckmann-rect", DerivativeSource::kAnalytic, 32);
+  a.param_overrides = {{"fp_max", 0.05}};
+  RenderSettings b = a;
+  b.param_overrides = {{"fp_max", 1.0}};
+  b.material.alpha = {0.2, 0.2};
+  auto [ra, ea] = Renderer::Create(a);
+  ASSERT_TRUE(ra) << ea;
+  auto [rb, eb] = Renderer::Create(b);
+  ASSERT_TRUE(rb) << eb;
+  EXPECT_EQ(rb->timings().pipeline_ms, 0.0);  // compiled once, for `a` (or an earlier test)
+  const Frame a1 = ra->RenderFrame(2).frame, b1 = rb->RenderFrame(2).frame;
+  auto same = [](const Frame& x, const Frame& y) {
+    return x.planes.size() == y.planes.size() &&
+           std::memcmp(x.planes.data(), y.planes.data(), x.planes.size() * sizeof(float)) == 0;
+  };
+  EXPECT_FALSE(same(a1, b1));
+  Frame a2, b2;
+  std::thread other([&] { b2 = rb->RenderFrame(2).frame; });
+  a2 = ra->RenderFrame(2).frame;
+  other.join();
+  EXPECT_TRUE(same(a1, a2));
+  EXPECT_TRUE(same(b1, b2));
+  // And as a renderer alone in a fresh process would (its own device).
+  RenderSettings lone = b;
+  lone.lose_device_after_dispatches = 1000;  // a private device and pipeline
+  EXPECT_TRUE(same(b1, RenderOne(lone, 2)));
 }
 
 // A device lost mid-sequence (injected: lavapipe never loses its device)

@@ -79,9 +79,16 @@ SpirvCache& Cache() {
 // constants) or material values compile the same pipeline. Never destroyed:
 // tearing Vulkan down from static destructors would race the driver's own
 // teardown, and the OS reclaims everything at exit.
+// One pipeline, compiled by the first renderer that needs it while the others
+// that need it wait; renderers needing other pipelines go on meanwhile.
+struct PipelineSlot {
+  std::once_flag compiled;
+  std::shared_ptr<vk::ComputePipeline> pipeline;
+  std::string error;
+};
 struct SharedDevice {
   std::shared_ptr<vk::Context> ctx;
-  std::map<std::pair<std::string, std::vector<std::int32_t>>, std::shared_ptr<vk::ComputePipeline>> pipelines;
+  std::map<std::pair<std::string, std::vector<std::int32_t>>, std::shared_ptr<PipelineSlot>> pipelines;
 };
 struct DeviceCache {
   std::mutex mutex;
@@ -326,16 +333,19 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
   auto t1 = Clock::now();
   using vk::BufferKind;
   const BufferKind kinds[] = {BufferKind::kUniform, BufferKind::kStorage, BufferKind::kStorage, BufferKind::kStorage};
-  std::shared_ptr<vk::ComputePipeline>& pipeline =
+  std::shared_ptr<PipelineSlot>& entry =
       device->pipelines[{key, std::vector<std::int32_t>(std::begin(spec), std::end(spec))}];
-  if (!pipeline) {
-    auto pipe = im.ctx->CreatePipeline(spirv, spec, kinds, sizeof(GpuPush));
-    if (!pipe) return Out{nullptr, pipe.error};
-    pipeline = std::move(pipe.value);
-    im.timings.pipeline_ms = MsSince(t1);
-  }
-  im.pipeline = pipeline;
+  if (!entry) entry = std::make_shared<PipelineSlot>();
+  const std::shared_ptr<PipelineSlot> slot = entry;
   if (devices_lock.owns_lock()) devices_lock.unlock();
+  std::call_once(slot->compiled, [&] {
+    auto pipe = im.ctx->CreatePipeline(spirv, spec, kinds, sizeof(GpuPush));
+    slot->error = pipe.error;
+    slot->pipeline = std::move(pipe.value);
+    im.timings.pipeline_ms = MsSince(t1);
+  });
+  if (!slot->pipeline) return Out{nullptr, slot->error};
+  im.pipeline = slot->pipeline;
 
   im.words = scene::PackScene(settings.scene);
   // Rows of all the layers that fit one storage buffer, in whole workgroups.

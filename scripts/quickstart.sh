@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The main job: installs dependencies, builds shimmer, runs the quick spec
-# (every filter variant on two scenes, about a minute on 2 cores with lavapipe)
+# (every filter variant on two scenes, about half a minute on 2 cores with lavapipe)
 # and writes its report to results/quick/.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)

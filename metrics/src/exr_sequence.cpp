@@ -137,6 +137,70 @@ FrameCheck CheckFrame(const fs::path& frame, const ExrSequence& seq) {
   return {std::nullopt, HasMotion(*layers)};
 }
 
+// One layer's luminance (and motion) from an open file.
+Result<Frame> ReadLayer(const ExrInput& in, const fs::path& file, const std::string& layer, int width, int height,
+                        bool with_motion) {
+  using R = Result<Frame>;
+  LayerMap layers = MapLayers(in);
+  auto it = layers.find(layer);
+  if (it == layers.end() || !HasLuminance(it->second))
+    return R::Failure(file.string() + ": no layer '" + layer + "' with R,G,B (layers: " +
+                      Join(LuminanceLayers(layers)) + ")");
+  const auto& components = it->second;
+  const bool rgb = components.count("R") && components.count("G") && components.count("B");
+  if (with_motion && !HasMotion(layers)) return R::Failure(file.string() + ": no motion.X/motion.Y channels");
+
+  // Component planes to fill, grouped by part below.
+  std::vector<std::pair<ChannelRef, cv::Mat*>> wanted;
+  cv::Mat r(height, width, CV_32F), g, b, mx, my;
+  if (rgb) {
+    g.create(height, width, CV_32F);
+    b.create(height, width, CV_32F);
+    wanted = {{components.at("R"), &r}, {components.at("G"), &g}, {components.at("B"), &b}};
+  } else {
+    wanted = {{components.at("Y"), &r}};
+  }
+  if (with_motion) {
+    mx.create(height, width, CV_32F);
+    my.create(height, width, CV_32F);
+    wanted.push_back({layers.at("motion").at("X"), &mx});
+    wanted.push_back({layers.at("motion").at("Y"), &my});
+  }
+  std::set<int> parts;
+  for (const auto& w : wanted) parts.insert(w.first.part);
+  for (int p : parts) {
+    const detail::ExrPartInfo& part = in.parts()[p];
+    if (part.deep) return R::Failure(file.string() + ": deep EXR images are not supported");
+    if (part.width != width || part.height != height)
+      return R::Failure(file.string() + ": frame is " + std::to_string(part.width) + "x" +
+                        std::to_string(part.height) + ", expected " + std::to_string(width) + "x" +
+                        std::to_string(height));
+    std::vector<detail::ExrPlaneRequest> requests;
+    for (const auto& [ref, plane] : wanted) {
+      if (ref.part != p) continue;
+      for (const detail::ExrChannelInfo& c : part.channels)
+        if (c.name == ref.name && (c.x_sampling != 1 || c.y_sampling != 1))
+          return R::Failure(file.string() + ": channel " + ref.name + " is subsampled; not supported");
+      requests.push_back({ref.name, plane->ptr<float>()});
+    }
+    if (Status read = in.Read(p, requests); !read) return R::Failure(read.error());
+  }
+  Frame frame;
+  if (rgb) {
+    frame.luminance.create(height, width, CV_32F);
+    for (int y = 0; y < height; ++y) {
+      const float *pr = r.ptr<float>(y), *pg = g.ptr<float>(y), *pb = b.ptr<float>(y);
+      float* out = frame.luminance.ptr<float>(y);
+      for (int x = 0; x < width; ++x)
+        out[x] = static_cast<float>(kLumaR * pr[x] + kLumaG * pg[x] + kLumaB * pb[x]);
+    }
+  } else {
+    frame.luminance = r;
+  }
+  if (with_motion) cv::merge(std::vector<cv::Mat>{mx, my}, frame.motion);
+  return frame;
+}
+
 }  // namespace
 
 Result<std::vector<std::string>> ListLayers(const fs::path& file) {
@@ -252,67 +316,9 @@ Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& re
 }
 
 Result<Frame> ReadFrame(const fs::path& file, const std::string& layer, int width, int height, bool with_motion) {
-  using R = Result<Frame>;
   auto in = ExrInput::Open(file, /*whole_file=*/true);
-  if (!in) return R::Failure(in.error());
-  LayerMap layers = MapLayers(*in);
-  auto it = layers.find(layer);
-  if (it == layers.end() || !HasLuminance(it->second))
-    return R::Failure(file.string() + ": no layer '" + layer + "' with R,G,B (layers: " +
-                      Join(LuminanceLayers(layers)) + ")");
-  const auto& components = it->second;
-  const bool rgb = components.count("R") && components.count("G") && components.count("B");
-  if (with_motion && !HasMotion(layers)) return R::Failure(file.string() + ": no motion.X/motion.Y channels");
-
-  // Component planes to fill, grouped by part below.
-  std::vector<std::pair<ChannelRef, cv::Mat*>> wanted;
-  cv::Mat r(height, width, CV_32F), g, b, mx, my;
-  if (rgb) {
-    g.create(height, width, CV_32F);
-    b.create(height, width, CV_32F);
-    wanted = {{components.at("R"), &r}, {components.at("G"), &g}, {components.at("B"), &b}};
-  } else {
-    wanted = {{components.at("Y"), &r}};
-  }
-  if (with_motion) {
-    mx.create(height, width, CV_32F);
-    my.create(height, width, CV_32F);
-    wanted.push_back({layers.at("motion").at("X"), &mx});
-    wanted.push_back({layers.at("motion").at("Y"), &my});
-  }
-  std::set<int> parts;
-  for (const auto& w : wanted) parts.insert(w.first.part);
-  for (int p : parts) {
-    const detail::ExrPartInfo& part = in->parts()[p];
-    if (part.deep) return R::Failure(file.string() + ": deep EXR images are not supported");
-    if (part.width != width || part.height != height)
-      return R::Failure(file.string() + ": frame is " + std::to_string(part.width) + "x" +
-                        std::to_string(part.height) + ", expected " + std::to_string(width) + "x" +
-                        std::to_string(height));
-    std::vector<detail::ExrPlaneRequest> requests;
-    for (const auto& [ref, plane] : wanted) {
-      if (ref.part != p) continue;
-      for (const detail::ExrChannelInfo& c : part.channels)
-        if (c.name == ref.name && (c.x_sampling != 1 || c.y_sampling != 1))
-          return R::Failure(file.string() + ": channel " + ref.name + " is subsampled; not supported");
-      requests.push_back({ref.name, plane->ptr<float>()});
-    }
-    if (Status read = in->Read(p, requests); !read) return R::Failure(read.error());
-  }
-  Frame frame;
-  if (rgb) {
-    frame.luminance.create(height, width, CV_32F);
-    for (int y = 0; y < height; ++y) {
-      const float *pr = r.ptr<float>(y), *pg = g.ptr<float>(y), *pb = b.ptr<float>(y);
-      float* out = frame.luminance.ptr<float>(y);
-      for (int x = 0; x < width; ++x)
-        out[x] = static_cast<float>(kLumaR * pr[x] + kLumaG * pg[x] + kLumaB * pb[x]);
-    }
-  } else {
-    frame.luminance = r;
-  }
-  if (with_motion) cv::merge(std::vector<cv::Mat>{mx, my}, frame.motion);
-  return frame;
+  if (!in) return Result<Frame>::Failure(in.error());
+  return ReadLayer(*in, file, layer, width, height, with_motion);
 }
 
 Result<cv::Mat> ReadMask(const fs::path& file, int width, int height) {
@@ -323,19 +329,17 @@ Result<cv::Mat> ReadMask(const fs::path& file, int width, int height) {
   std::string ext = file.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   if (ext == ".exr") {
-    auto layers = ListLayers(file);
-    if (!layers) return R::Failure(layers.error());
-    std::string layer = layers->empty() ? "" : layers->front();
-    for (const std::string& l : *layers)
+    // One open: the file's layers, its own size (checked against the
+    // frames' below, as for any image), then its pixels.
+    auto in = ExrInput::Open(file, /*whole_file=*/true);
+    if (!in) return R::Failure(in.error());
+    const std::vector<std::string> layers = LuminanceLayers(MapLayers(*in));
+    std::string layer = layers.empty() ? "" : layers.front();
+    for (const std::string& l : layers)
       if (l == kBeautyLayer) layer = l;
     if (layer.empty()) return R::Failure(file.string() + ": mask EXR has no R,G,B or Y channels");
-    auto in = ExrInput::Open(file);
-    if (!in) return R::Failure(in.error());
-    FrameSize w = SizeOf(in->parts().front());
-    if (w.width != width || w.height != height)
-      return R::Failure(file.string() + ": mask is " + std::to_string(w.width) + "x" + std::to_string(w.height) +
-                        " but the frames are " + std::to_string(width) + "x" + std::to_string(height));
-    auto frame = ReadFrame(file, layer, width, height, false);
+    const FrameSize size = SizeOf(in->parts().front());
+    auto frame = ReadLayer(*in, file, layer, size.width, size.height, false);
     if (!frame) return R::Failure(frame.error());
     image = frame->luminance;
   } else {

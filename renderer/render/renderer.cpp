@@ -362,9 +362,10 @@ std::pair<std::unique_ptr<Renderer>, std::string> Renderer::Create(const RenderS
   const std::size_t bytes[] = {sizeof(GpuFrame), im.words.size() * sizeof(glm::vec4),
                                std::size_t(im.band_rows) * row_bytes, 16};
   std::unique_ptr<vk::Buffer>* slots[] = {&im.frame_buf, &im.scene_buf, &im.image_buf, &im.counter_buf};
+  const char* names[] = {"frame constants", "scene", "image band", "counter"};
   for (int i = 0; i < 4; ++i) {
     auto b = im.ctx->CreateBuffer(bytes[i], kinds[i]);
-    if (!b) return Out{nullptr, b.error};
+    if (!b) return Out{nullptr, std::string(names[i]) + ": " + b.error};
     *slots[i] = std::move(b.value);
   }
   std::memcpy(im.scene_buf->data(), im.words.data(), im.words.size() * sizeof(glm::vec4));
@@ -392,7 +393,7 @@ Renderer::Result Renderer::RenderFrame(int index) {
   };
   put(f.light_a, l.vec, double(static_cast<int>(l.type)));
   put(f.light_b, l.radiance, l.radius);
-  put(f.mat_a, {s.material.alpha.x, s.material.alpha.y, double(static_cast<int>(s.material.ndf))}, 0);
+  put(f.mat_a, {s.material.alpha.x, s.material.alpha.y, 0.0}, 0);  // the NDF is specialization constant 4
   put(f.mat_f0, s.material.f0, 0);
   put(f.mat_albedo, s.material.albedo, 0);
   f.size[0] = s.width;

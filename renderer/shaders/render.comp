@@ -38,7 +38,7 @@ layout(std140, binding = 0) uniform FrameBuf {
   CameraGpu prevCam;
   vec4 lightA;  // direction or centre, type
   vec4 lightB;  // radiance or intensity, radius
-  vec4 matA;    // alpha x, alpha y, ndf (the kernel reads MATERIAL_NDF instead)
+  vec4 matA;    // alpha x, alpha y, unused, unused (the NDF is MATERIAL_NDF)
   vec4 matF0;
   vec4 matAlbedo;
   ivec4 size;   // width, height, first row and row count of this dispatch's band

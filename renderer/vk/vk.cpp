@@ -354,7 +354,7 @@ Expected<Buffer> Context::CreateBuffer(std::size_t bytes, BufferKind kind) {
   bytes = std::max<std::size_t>(bytes, 16);
   if (kind == BufferKind::kStorage && bytes > info_.max_storage_buffer_range) {
     out.error = "a storage buffer of " + std::to_string(bytes >> 20) + " MiB exceeds the device's limit of " +
-                std::to_string(info_.max_storage_buffer_range >> 20) + " MiB; render a smaller image";
+                std::to_string(info_.max_storage_buffer_range >> 20) + " MiB";
     return out;
   }
   if (kind == BufferKind::kUniform && bytes > info_.max_uniform_buffer_range) {

@@ -68,14 +68,11 @@ void WriteSequence(const fs::path& dir, int width, int height, int frames, bool 
     cv::Mat beauty = spec + diffuse;
     char name[32];
     std::snprintf(name, sizeof name, "frame_%04d.exr", t);
-    m::Status s = m::WriteExr(dir / name, {{"R", beauty},
-                                           {"G", beauty},
-                                           {"B", beauty},
-                                           {"specular.R", spec},
-                                           {"specular.G", spec},
-                                           {"specular.B", spec},
-                                           {"motion.X", mx},
-                                           {"motion.Y", my}});
+    shimmer::Status s = shimmer::WriteExr(dir / name, width, height,
+                                          {m::PlaneOf("R", beauty), m::PlaneOf("G", beauty), m::PlaneOf("B", beauty),
+                                           m::PlaneOf("specular.R", spec), m::PlaneOf("specular.G", spec),
+                                           m::PlaneOf("specular.B", spec), m::PlaneOf("motion.X", mx),
+                                           m::PlaneOf("motion.Y", my)});
     if (!s) {
       std::fprintf(stderr, "%s\n", s.error().c_str());
       std::exit(1);

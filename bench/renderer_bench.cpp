@@ -10,9 +10,9 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "renderer.h"
-#include "scene.h"
-#include "shading.h"
+#include "shimmer/renderer/renderer.h"
+#include "shimmer/renderer/scene.h"
+#include "shimmer/renderer/shading.h"
 
 namespace {
 
@@ -22,7 +22,7 @@ constexpr int kSize = 512;
 
 render::RenderSettings Settings(const std::string& variant) {
   render::RenderSettings s;
-  s.scene = scene::LoadScene("sphere-field").value;
+  s.scene = scene::LoadScene("sphere-field").value();
   s.material = s.scene.material;
   s.variant = variant;
   s.width = kSize;
@@ -35,21 +35,22 @@ render::RenderSettings Settings(const std::string& variant) {
 void BM_Frame(benchmark::State& state, std::string variant, shading::DerivativeSource d) {
   render::RenderSettings s = Settings(variant);
   s.derivatives = d;
-  auto [r, error] = render::Renderer::Create(s);
-  if (!r) {
-    state.SkipWithError(error.c_str());
+  auto created = render::Renderer::Create(s);
+  if (!created) {
+    state.SkipWithError(created.error().c_str());
     return;
   }
+  render::Renderer* r = created->get();
   int frame = 0;
   double readback = 0;
   for (auto _ : state) {
     auto res = r->RenderFrame(frame++);
-    if (!res.error.empty()) {
-      state.SkipWithError(res.error.c_str());
+    if (!res) {
+      state.SkipWithError(res.error().c_str());
       return;
     }
-    state.SetIterationTime(res.frame.gpu_ms * 1e-3);
-    readback += res.frame.readback_ms;
+    state.SetIterationTime(res->gpu_ms * 1e-3);
+    readback += res->readback_ms;
   }
   state.counters["readback_ms"] = readback / frame;
   state.counters["compile_ms"] = r->timings().compile_ms;
@@ -60,37 +61,42 @@ void BM_Frame(benchmark::State& state, std::string variant, shading::DerivativeS
 void BM_Reference(benchmark::State& state) {
   render::RenderSettings s = Settings("none");
   s.reference_spp = static_cast<int>(state.range(0));
-  auto [r, error] = render::Renderer::Create(s);
-  if (!r) {
-    state.SkipWithError(error.c_str());
+  auto created = render::Renderer::Create(s);
+  if (!created) {
+    state.SkipWithError(created.error().c_str());
     return;
   }
+  render::Renderer* r = created->get();
   int frame = 0;
   double samples = 0, seconds = 0;
   for (auto _ : state) {
     auto res = r->RenderFrame(frame++);
-    if (!res.error.empty()) {
-      state.SkipWithError(res.error.c_str());
+    if (!res) {
+      state.SkipWithError(res.error().c_str());
       return;
     }
-    state.SetIterationTime(res.frame.gpu_ms * 1e-3);
+    state.SetIterationTime(res->gpu_ms * 1e-3);
     samples += double(kSize) * kSize * s.reference_spp * s.reference_spp;
-    seconds += res.frame.gpu_ms * 1e-3;
+    seconds += res->gpu_ms * 1e-3;
   }
   state.counters["Msamples_per_s"] = samples / seconds * 1e-6;
 }
 
 void BM_ExrWrite(benchmark::State& state) {
-  auto [r, error] = render::Renderer::Create(Settings("none"));
-  if (!r) {
-    state.SkipWithError(error.c_str());
+  auto created = render::Renderer::Create(Settings("none"));
+  if (!created) {
+    state.SkipWithError(created.error().c_str());
     return;
   }
-  render::Frame f = r->RenderFrame(0).frame;
+  auto frame = (*created)->RenderFrame(0);
+  if (!frame) {
+    state.SkipWithError(frame.error().c_str());
+    return;
+  }
   auto path = (std::filesystem::temp_directory_path() / "shimmer_bench_frame.exr").string();
   for (auto _ : state) {
-    std::string e = render::WriteExr(path, f, false);
-    if (!e.empty()) state.SkipWithError(e.c_str());
+    Status s = render::WriteFrameExr(path, *frame, false);
+    if (!s) state.SkipWithError(s.error().c_str());
   }
   std::filesystem::remove(path);
 }

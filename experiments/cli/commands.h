@@ -6,8 +6,11 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
-#include "runner.h"
+#include "shimmer/core/result.h"
+
+#include "shimmer/experiments/runner.h"
 
 namespace shimmer::cli {
 
@@ -16,6 +19,33 @@ namespace shimmer::cli {
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+// A library's Error on its way to main: exit 2 for bad input, 1 otherwise.
+struct CommandError : std::runtime_error {
+  CommandError(const Error& e) : std::runtime_error(e.message), code(e.code) {}  // NOLINT: implicit
+  ErrorCode code;
+};
+inline constexpr int kExitBadInput = 2;
+inline constexpr int kExitFailure = 1;
+
+// Library messages name fields ("width", "frames"); the CLI's user typed
+// flags. Each (field, flag) pair rewrites a message that starts with the field.
+using FieldFlags = std::vector<std::pair<std::string, std::string>>;
+Error WithFlagNames(const Error& error, const FieldFlags& fields);
+
+// The value of `result`, or a CommandError carrying its error.
+template <class T>
+T Take(Result<T> result, const FieldFlags& fields = {}) {
+  if (!result) throw CommandError(WithFlagNames(result.failure(), fields));
+  return std::move(*result);
+}
+inline void Check(const Status& status, const FieldFlags& fields = {}) {
+  if (!status) throw CommandError(WithFlagNames(status.failure(), fields));
+}
+
+// Refuses to create an output file in a directory that does not exist: the
+// user's typo would otherwise become a tree of new directories.
+void RequireParentDirectory(const std::string& option, const std::string& path);
 
 // "--param name=value" as a (name, value) pair; UsageError for anything else.
 std::pair<std::string, double> ParseParamOption(const std::string& text);

@@ -5,9 +5,9 @@
 #include <filesystem>
 
 #include "commands.h"
-#include "fit_report.h"
-#include "fit_run.h"
-#include "spec.h"
+#include "shimmer/experiments/fit_report.h"
+#include "shimmer/experiments/fit_run.h"
+#include "shimmer/experiments/spec.h"
 
 namespace shimmer::cli {
 
@@ -19,16 +19,17 @@ struct FitCliOptions {
 };
 
 void Run(const FitCliOptions& o) {
-  const experiments::SpecResult spec = experiments::LoadSpec(o.spec);
-  if (!spec.ok()) throw UsageError(spec.error);
-  if (spec.spec.fits.empty()) throw UsageError(o.spec + ": the spec has no \"fit\" section");
+  const experiments::Spec spec = Take(experiments::LoadSpec(o.spec));
+  if (spec.fits.empty()) throw UsageError(o.spec + ": the spec has no \"fit\" section");
   experiments::RunOptions ro;
-  StorePaths(spec.spec.name, o.db, o.work, "fit.db", &ro);
+  StorePaths(spec.name, o.db, o.work, "fit.db", &ro);
   ro.keep_frames = o.keep_frames;
   ro.device = o.device;
+  // Results on stdout, progress on stderr: `shimmer fit spec.json > fits.txt` keeps the answers.
   const experiments::FitOutcome outcome = experiments::RunFits(
-      spec.spec, ro, [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); });
-  if (!outcome.error.empty()) throw std::runtime_error(outcome.error);
+      spec, ro, [](const std::string& line) { std::printf("%s\n", line.c_str()), std::fflush(stdout); },
+      [](const std::string& line) { std::fprintf(stderr, "shimmer: %s\n", line.c_str()); });
+  if (outcome.error) throw CommandError(*outcome.error);
   for (const experiments::FitLaw& l : outcome.laws) {
     std::printf("%s, %s materials: %s(alpha) = %.4g * alpha^%.4g; log residuals:", l.variant.c_str(), l.ndf.c_str(),
                 l.param.c_str(), l.law.a, l.law.b);
@@ -36,10 +37,9 @@ void Run(const FitCliOptions& o) {
       std::printf(" %s %+.3f", l.materials[i].c_str(), l.law.residuals[i]);
     std::printf("\n");
   }
-  const std::string out = o.out.empty() ? (std::filesystem::path("results") / spec.spec.name).string() : o.out;
+  const std::string out = o.out.empty() ? (std::filesystem::path("results") / spec.name).string() : o.out;
   std::vector<std::string> warnings;
-  if (std::string e = experiments::WriteFitReport(outcome, spec.spec, out, &warnings); !e.empty())
-    throw std::runtime_error(e);
+  Check(experiments::WriteFitReport(outcome, spec, out, &warnings));
   for (const std::string& w : warnings) std::fprintf(stderr, "shimmer: warning: %s\n", w.c_str());
   std::printf("fit: %s/fit.md (rows in %s)\n", out.c_str(), ro.db_path.c_str());
 }

@@ -1,6 +1,7 @@
 // shimmer: measures the temporal stability of specular highlights.
 #include <cstdio>
 #include <exception>
+#include <new>
 
 #include "commands.h"
 
@@ -17,16 +18,31 @@ int main(int argc, char** argv) {
   shimmer::cli::AddSweepCommand(app);
   shimmer::cli::AddReportCommand(app);
   shimmer::cli::AddFitCommand(app);
+  using shimmer::cli::kExitBadInput;
+  using shimmer::cli::kExitFailure;
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // CLI11's own exit codes (104-109) would tell scripts nothing; every
+    // problem with the command line is bad input.
+    std::fprintf(stderr, "shimmer: error: %s (see shimmer --help)\n", e.what());
+    return kExitBadInput;
   } catch (const shimmer::cli::UsageError& e) {
     std::fprintf(stderr, "shimmer: error: %s\n", e.what());
-    return 2;
+    return kExitBadInput;
+  } catch (const shimmer::cli::CommandError& e) {
+    std::fprintf(stderr, "shimmer: error: %s\n", e.what());
+    return e.code == shimmer::ErrorCode::kBadInput ? kExitBadInput : kExitFailure;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "shimmer: error: out of memory\n");
+    return kExitFailure;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "shimmer: error: %s\n", e.what());
-    return 1;
+    return kExitFailure;
   }
   return 0;
 }

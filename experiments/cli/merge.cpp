@@ -2,7 +2,7 @@
 #include <cstdio>
 
 #include "commands.h"
-#include "result_store.h"
+#include "shimmer/experiments/result_store.h"
 
 namespace shimmer::cli {
 
@@ -13,11 +13,9 @@ void AddMergeCommand(CLI::App& app) {
   cmd->add_option("stores", *inputs, "Result stores to join")->required();
   cmd->add_option("-o,--output", *output, "The joined store (created or extended)")->required();
   cmd->callback([inputs, output] {
-    auto [store, error] = experiments::ResultStore::Open(*output);
-    if (!store) throw UsageError(error);
-    for (const std::string& in : *inputs)
-      if (std::string e = store->MergeFrom(in); !e.empty()) throw UsageError(e);
-    std::printf("%s: %zu jobs\n", output->c_str(), store->All().size());
+    RequireParentDirectory("--output", *output);
+    const std::size_t jobs = Take(experiments::MergeStores(*inputs, *output));
+    std::printf("%s: %zu jobs\n", output->c_str(), jobs);
   });
 }
 

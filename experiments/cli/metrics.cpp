@@ -1,6 +1,8 @@
 // `shimmer metrics TEST [REF]`: the temporal metrics of DESIGN.md on any EXR
 // sequence, from shimmer's renderer or from anyone else's.
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -64,14 +66,17 @@ void Run(const MetricsCliOptions& o) {
   options.test = o.test;
   if (!o.reference.empty()) options.reference = o.reference;
   if (o.fps != 0) {
-    if (!(o.fps > 0)) throw UsageError("--fps must be > 0, got " + std::to_string(o.fps));
+    if (!(o.fps > 0) || o.fps > 1e6) throw UsageError("--fps must be in (0, 1e6], got " + std::to_string(o.fps));
     options.request.fps = o.fps;
   }
   options.request.layer = o.layer;
   if (!o.mask.empty()) options.mask_file = o.mask;
   options.highlight_mask = o.highlight_mask;
-  if (!(o.highlight_threshold >= 0)) throw UsageError("--highlight-threshold must be >= 0");
-  if (o.highlight_dilate < 0) throw UsageError("--highlight-dilate must be >= 0");
+  if (!(o.highlight_threshold >= 0) || !std::isfinite(o.highlight_threshold))
+    throw UsageError("--highlight-threshold must be a finite number >= 0");
+  // A radius beyond the largest EXR side dilates every mask to the whole frame.
+  if (o.highlight_dilate < 0 || o.highlight_dilate > 16384)
+    throw UsageError("--highlight-dilate must be in 0..16384 pixels, got " + std::to_string(o.highlight_dilate));
   options.highlight = {o.highlight_threshold, o.highlight_dilate};
   if (o.signal == "error")
     options.signal = m::FlickerSignal::kError;
@@ -79,36 +84,44 @@ void Run(const MetricsCliOptions& o) {
     options.signal = m::FlickerSignal::kTest;
   else if (!o.signal.empty())
     throw UsageError("--signal must be error or test, got '" + o.signal + "'");
-  if (o.segment < 0) throw UsageError("--segment must be >= 2");
+  if (o.segment < 0 || o.segment == 1) throw UsageError("--segment must be >= 2");
   options.segment_length = o.segment;
+  if (!o.video.empty()) RequireParentDirectory("--video", o.video);
+  if (!o.out.empty()) {
+    std::error_code ec;
+    const std::filesystem::path out(o.out);
+    if (std::filesystem::exists(out, ec) && !std::filesystem::is_directory(out, ec))
+      throw UsageError("--out " + o.out + ": exists and is not a directory");
+    RequireParentDirectory("--out", o.out);
+  }
 
   std::unique_ptr<m::SideBySideVideo> video;
   m::FrameObserver observer;
   if (!o.video.empty()) {
-    observer = [&](const m::ObservedFrame& frame) -> m::Status {
+    observer = [&](const m::ObservedFrame& frame) -> Status {
       if (!video) {
         auto opened = m::SideBySideVideo::Open(o.video, frame.test.cols, frame.test.rows, frame.fps,
                                                frame.has_reference);
-        if (!opened) return m::Status::Failure(opened.error());
+        if (!opened) return opened.failure();
         video = std::move(*opened);
       }
       return video->AddFrame(frame.test, frame.other);
     };
   }
 
-  auto report = m::ComputeMetrics(options, observer);
-  if (!report) throw UsageError(report.error());
-  std::vector<std::string> warnings = report->warnings;
-  if (video)
-    if (m::Status s = video->Finish(); !s) throw UsageError(s.error());
-  if (!o.out.empty())
-    if (m::Status s = m::WriteReportFiles(*report, o.out, &warnings); !s) throw UsageError(s.error());
-  for (size_t i = report->warnings.size(); i < warnings.size(); ++i) report->warnings.push_back(warnings[i]);
-  for (const std::string& w : report->warnings) Warn(w);
+  m::MetricsReport report = Take(m::ComputeMetrics(options, observer));
+  std::vector<std::string> warnings = report.warnings;
+  if (video) Check(video->Finish());
+  if (!o.out.empty()) Check(m::WriteReportFiles(report, o.out, &warnings));
+  for (size_t i = report.warnings.size(); i < warnings.size(); ++i) report.warnings.push_back(warnings[i]);
+  for (const std::string& w : report.warnings) Warn(w);
   if (o.json)
-    std::cout << m::ToJson(*report).dump() << "\n";
+    std::cout << m::ToJson(report).dump() << "\n";
   else
-    PrintText(*report);
+    PrintText(report);
+  // What was written goes to stderr, so that --json output stays one object.
+  if (video) std::fprintf(stderr, "shimmer: wrote %s\n", o.video.c_str());
+  if (!o.out.empty()) std::fprintf(stderr, "shimmer: wrote maps, spectrum and metrics.json to %s\n", o.out.c_str());
 }
 
 }  // namespace

@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
-#include "shading.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::cli {
 
@@ -72,21 +72,20 @@ void Run(const NdfOptions& o) {
 
   std::vector<std::pair<std::string, double>> overrides;
   for (const std::string& p : o.params) overrides.push_back(ParseParamOption(p));
-  shading::ResolvedParams resolved = shading::ResolveParams(*info, overrides);
-  if (!resolved.error.empty()) throw UsageError(resolved.error);
+  const shading::Params<double> resolved = Take(shading::ResolveParams(*info, overrides));
 
   double slope_density = 0, density = 0, aex = 0, aey = 0;
   if (o.precision == "float") {
-    auto r = Evaluate<float>(*info, *ndf, o, resolved.values);
+    auto r = Evaluate<float>(*info, *ndf, o, resolved);
     slope_density = r.slope_density, density = r.density, aex = r.alpha_eff.x, aey = r.alpha_eff.y;
   } else {
-    auto r = Evaluate<double>(*info, *ndf, o, resolved.values);
+    auto r = Evaluate<double>(*info, *ndf, o, resolved);
     slope_density = r.slope_density, density = r.density, aex = r.alpha_eff.x, aey = r.alpha_eff.y;
   }
 
   nlohmann::json params = nlohmann::json::object();
   for (const shading::ParamInfo& p : info->params)
-    params[std::string(p.name)] = shading::ParamValue(resolved.values, p.name);
+    params[std::string(p.name)] = shading::ParamValue(resolved, p.name);
   double ax = o.alpha[0], ay = o.alpha.size() > 1 ? o.alpha[1] : o.alpha[0];
   nlohmann::json out = {{"variant", o.variant},
                         {"ndf", o.ndf},

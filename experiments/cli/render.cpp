@@ -3,14 +3,10 @@
 #include <unistd.h>
 
 #include <cstdio>
-#include <fstream>
-
-#include <nlohmann/json.hpp>
 
 #include "commands.h"
-#include "renderer.h"
-#include "scene.h"
-#include "vk.h"
+#include "shimmer/renderer/renderer.h"
+#include "shimmer/renderer/scene.h"
 
 namespace shimmer::cli {
 
@@ -45,34 +41,47 @@ void PrintProgress(int done, int total) {
   std::fflush(stderr);
 }
 
-void Run(const RenderOptions& o) {
+// RenderSettings' field names in library messages, as the flags the user typed.
+const FieldFlags kRenderFlags = {{"width and height", "--size"},
+                                 {"frames", "--frames"},
+                                 {"fps", "--fps"},
+                                 {"reference_spp", "--reference-spp"},
+                                 {"reference_tolerance", "--reference-tolerance"},
+                                 {"max_rounds", "--max-rounds"},
+                                 {"a reference renders variant none, not a variant file",
+                                  "--reference-spp and --reference-tolerance render variant none; drop --variant-file"},
+                                 {"a reference is already supersampled; use variant none with reference_spp",
+                                  "a reference is already supersampled; use --variant none with --reference-spp"}};
+
+void Run(const RenderOptions& o, const CLI::App& cmd) {
   if (o.list_devices) {
-    std::string error;
-    auto devices = vk::Context::ListDevices(&error);
-    if (!error.empty()) throw std::runtime_error(error);
-    for (const auto& d : devices)
-      std::printf("%s (%s, subgroup %u%s)\n", d.name.c_str(), d.type.c_str(), d.subgroup_size,
-                  d.quad_ops_in_compute ? ", quad ops" : "");
+    for (const auto& d : Take(render::ListDevices()))
+      std::printf("%s (%s, %s, subgroup %u%s)\n", d.name.c_str(), d.type.c_str(), d.driver.c_str(), d.subgroup_size,
+                  d.quad_ops ? ", quad ops" : "");
     return;
   }
+  if (!o.variant_file.empty() && cmd.count("--variant") > 0)
+    throw UsageError("--variant " + o.variant + " and --variant-file " + o.variant_file +
+                     " both name the filter; give one");
   render::RenderSettings s;
-  auto scene = scene::LoadScene(o.scene);
-  if (!scene.ok()) throw UsageError(scene.error);
-  s.scene = scene.value;
+  s.scene = Take(scene::LoadScene(o.scene), {{"unknown scene", "--scene: unknown scene"}});
   s.material = s.scene.material;
-  if (!o.material.empty()) {
-    auto m = scene::ParseMaterial(o.material, s.scene.material);
-    if (!m.ok()) throw UsageError(m.error);
-    s.material = m.value;
+  if (!o.material.empty()) s.material = Take(scene::ParseMaterial(o.material, s.scene.material));
+  const auto camera = scene::ParseCameraPath(o.camera);
+  if (!camera) {
+    std::string list;
+    for (auto n : scene::CameraPathNames()) list += (list.empty() ? "" : ", ") + std::string(n);
+    throw UsageError("--camera must be one of " + list + ", got '" + o.camera + "'");
   }
-  s.camera = o.camera;
+  s.camera = *camera;
   s.variant = o.variant;
   s.variant_file = o.variant_file;
   for (const std::string& p : o.params) s.param_overrides.push_back(ParseParamOption(p));
-  if (o.derivatives == "quad" || o.derivatives == "quad-fine") s.derivatives = shading::DerivativeSource::kQuadFine;
-  else if (o.derivatives == "quad-coarse") s.derivatives = shading::DerivativeSource::kQuadCoarse;
-  else if (o.derivatives == "analytic") s.derivatives = shading::DerivativeSource::kAnalytic;
-  else throw UsageError("--derivatives must be quad, quad-fine, quad-coarse or analytic, got '" + o.derivatives + "'");
+  const auto derivatives = shading::ParseDerivativeSource(o.derivatives);
+  if (!derivatives)
+    throw UsageError("--derivatives must be " + std::string(shading::kDerivativeSourceList) + ", got '" +
+                     o.derivatives + "'");
+  s.derivatives = *derivatives;
   s.frames = o.frames;
   s.width = o.size[0];
   s.height = o.size[1];
@@ -83,17 +92,14 @@ void Run(const RenderOptions& o) {
   s.max_rounds = o.max_rounds;
   s.device = o.device;
   s.preview_png = o.preview;
+  if (!o.preview.empty()) RequireParentDirectory("--preview", o.preview);
   const bool tty = isatty(fileno(stderr));
-  std::string error = render::RenderSequence(s, o.out, tty ? PrintProgress : std::function<void(int, int)>());
-  if (!error.empty()) throw std::runtime_error(error);
-
-  std::ifstream in(o.out + "/sequence.json");
-  nlohmann::json seq = nlohmann::json::parse(in, nullptr, false);
-  double gpu = 0;
-  for (const auto& f : seq["frames"]) gpu += f["gpu_ms"].get<double>();
+  const SequenceFile seq =
+      Take(render::RenderSequence(s, o.out, tty ? PrintProgress : std::function<void(int, int)>()), kRenderFlags);
   std::printf("%d frames of %s (%s, %s) at %dx%d in %s: %.2f ms/frame on %s\n", s.frames, s.scene.name.c_str(),
-              s.camera.c_str(), seq["variant"].get<std::string>().c_str(), s.width, s.height, o.out.c_str(),
-              gpu / s.frames, seq["device"].get<std::string>().c_str());
+              seq.camera.path.c_str(), seq.variant.c_str(), s.width, s.height, o.out.c_str(), seq.MeanGpuMs(),
+              seq.device.c_str());
+  if (!o.preview.empty()) std::printf("preview: %s\n", o.preview.c_str());
 }
 
 }  // namespace
@@ -115,12 +121,12 @@ void AddRenderCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--variant-file", o->variant_file,
                   "GLSL file defining FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, "
-                  "VariantParams p); compiled at run time");
+                  "VariantParams p); compiled at run time (instead of --variant)");
   cmd->add_option("--param", o->params, "Variant parameter name=value (repeatable)");
   cmd->add_option("--derivatives", o->derivatives, "quad (= quad-fine), quad-coarse or analytic")
       ->capture_default_str();
   cmd->add_option("--frames", o->frames, "Number of frames")->capture_default_str();
-  cmd->add_option("--size", o->size, "Width and height in pixels")->expected(2)->capture_default_str();
+  cmd->add_option("--size", o->size, "Width and height in pixels (1..16384)")->expected(2)->capture_default_str();
   cmd->add_option("--fps", o->fps, "Frames per second (camera time step; metadata)")->capture_default_str();
   auto spp = cmd->add_option("--reference-spp", o->reference_spp,
                              "Render the reference: variant none with N x N stratified samples per pixel");
@@ -133,7 +139,7 @@ void AddRenderCommand(CLI::App& app) {
   cmd->add_flag("--list-devices", o->list_devices, "List Vulkan devices and exit");
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   (void)spp;
-  cmd->callback([o] { Run(*o); });
+  cmd->callback([o, cmd] { Run(*o, *cmd); });
 }
 
 }  // namespace shimmer::cli

@@ -2,8 +2,8 @@
 #include <cstdio>
 
 #include "commands.h"
-#include "report.h"
-#include "result_store.h"
+#include "shimmer/experiments/report.h"
+#include "shimmer/experiments/result_store.h"
 
 namespace shimmer::cli {
 
@@ -12,15 +12,15 @@ void AddReportCommand(CLI::App& app) {
   auto out = std::make_shared<std::string>();
   auto title = std::make_shared<std::string>("shimmer report");
   CLI::App* cmd = app.add_subcommand("report", "Write report.md, report.csv and plots from a results store");
-  cmd->add_option("db", *db, "Results store (from shimmer run)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("db", *db, "Results store (from shimmer run); only read")->required();
   cmd->add_option("-o,--output", *out, "Report directory, e.g. results/quick")->required();
   cmd->add_option("--title", *title, "Heading of report.md")->capture_default_str();
   cmd->callback([db, out, title] {
-    auto [store, error] = experiments::ResultStore::Open(*db);
-    if (!store) throw UsageError(error);
+    auto store = Take(experiments::ResultStore::Open(*db, experiments::ResultStore::Mode::kReadOnly));
+    const auto rows = Take(store->All());
+    if (rows.empty()) throw UsageError(*db + ": the results store has no finished jobs");
     std::vector<std::string> warnings;
-    if (std::string e = experiments::WriteReport(store->All(), *title, *out, &warnings); !e.empty())
-      throw UsageError(*db + ": " + e);
+    Check(experiments::WriteReport(rows, *title, *out, &warnings));
     for (const std::string& w : warnings) std::fprintf(stderr, "shimmer: warning: %s\n", w.c_str());
     std::printf("report: %s/report.md\n", out->c_str());
   });

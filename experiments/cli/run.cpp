@@ -5,9 +5,9 @@
 #include <filesystem>
 
 #include "commands.h"
-#include "job.h"
-#include "runner.h"
-#include "spec.h"
+#include "shimmer/experiments/job.h"
+#include "shimmer/experiments/runner.h"
+#include "shimmer/experiments/spec.h"
 
 namespace shimmer::cli {
 
@@ -44,22 +44,21 @@ void PrintProgress(const experiments::RunProgress& p, bool tty) {
 }
 
 void Run(const RunCliOptions& o) {
-  const experiments::SpecResult spec = experiments::LoadSpec(o.spec);
-  if (!spec.ok()) throw UsageError(spec.error);
+  const experiments::Spec spec = Take(experiments::LoadSpec(o.spec));
   experiments::RunOptions ro;
   if (!experiments::ParseShard(o.shard, &ro.shard_index, &ro.shard_count))
     throw UsageError("--shard must be i/n with 0 <= i < n, got '" + o.shard + "'");
-  StorePaths(spec.spec.name, o.db, o.work, "results.db", &ro);
-  ro.keep_frames = o.keep_frames;
   if (o.jobs < 1 || o.jobs > 64) throw UsageError("--jobs must be between 1 and 64, got " + std::to_string(o.jobs));
+  StorePaths(spec.name, o.db, o.work, "results.db", &ro);
+  ro.keep_frames = o.keep_frames;
   ro.jobs = o.jobs;
   ro.device = o.device;
   const bool tty = isatty(fileno(stderr));
   ro.progress = [tty](const experiments::RunProgress& p) { PrintProgress(p, tty); };
-  const auto jobs = experiments::ExpandJobs(spec.spec);
+  const auto jobs = experiments::ExpandJobs(spec);
   const experiments::RunSummary s = experiments::RunJobs(jobs, ro);
-  if (!s.error.empty()) throw std::runtime_error(s.error);
-  std::printf("%s: %d jobs in shard %s (%d computed, %d already done) -> %s\n", spec.spec.name.c_str(), s.total,
+  if (s.error) throw CommandError(*s.error);
+  std::printf("%s: %d jobs in shard %s (%d computed, %d already done) -> %s\n", spec.name.c_str(), s.total,
               o.shard.c_str(), s.computed, s.skipped, ro.db_path.c_str());
 }
 

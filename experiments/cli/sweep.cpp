@@ -6,10 +6,13 @@
 #include <sstream>
 
 #include "commands.h"
-#include "job.h"
-#include "output_files.h"
-#include "runner.h"
-#include "spec.h"
+#include "shimmer/experiments/job.h"
+#include "shimmer/core/atomic_file.h"
+#include "shimmer/core/gnuplot.h"
+#include "shimmer/experiments/csv.h"
+#include "shimmer/experiments/output_files.h"
+#include "shimmer/experiments/runner.h"
+#include "shimmer/experiments/spec.h"
 
 namespace shimmer::cli {
 
@@ -52,57 +55,80 @@ experiments::Spec SweepSpec(const SweepOptions& o, std::string* name) {
       {"size", o.size},
       {"frames", o.frames},
       {"fps", o.fps},
-      {"reference", {{"spp", o.reference_spp}}},
-      {"metrics", {{"highlight_mask", false}}}};
-  experiments::SpecResult r = experiments::ParseSpec(spec.dump(), "sweep");
-  if (!r.ok()) throw UsageError(r.error);
-  return r.spec;
+      {"reference", {{"spp", o.reference_spp}}}};
+  auto parsed = experiments::ParseSpec(spec.dump(), "sweep");
+  if (parsed) return *parsed;
+  // "sweep:1: size: must be ..." names the spec's key; the user typed a flag.
+  std::string message = parsed.error();
+  for (int colons = 0; colons < 2 && !message.empty();) colons += message.front() == ':', message.erase(0, 1);
+  if (!message.empty() && message.front() == ' ') message.erase(0, 1);
+  const FieldFlags keys = {{"size:", "--size:"},
+                           {"frames:", "--frames:"},
+                           {"fps:", "--fps:"},
+                           {"spp:", "--reference-spp:"},
+                           {"derivatives:", "--derivatives:"},
+                           {o.variant + ":", "--variant " + o.variant + ":"},
+                           {o.camera + ":", "--camera " + o.camera + ":"},
+                           {o.material + ":", "--material " + o.material + ":"},
+                           {o.scene + ":", "--scene " + o.scene + ":"},
+                           {*name + ":", "--param " + *name + ":"}};
+  throw CommandError(WithFlagNames(Error{parsed.code(), message}, keys));
 }
 
 void Run(const SweepOptions& o) {
   std::string name;
   const experiments::Spec spec = SweepSpec(o, &name);
+  // Found before any rendering: the table would be lost after the work.
+  if (!o.csv.empty()) RequireParentDirectory("--csv", o.csv);
   experiments::RunOptions ro;
   ro.work_dir = o.work;
   ro.device = o.device;
-  std::filesystem::create_directories(o.work);
-  std::ostringstream csv;
-  csv << name << ",tv_ratio,tv_err,energy_bias,relmse,flicker_index,ms_per_frame\n";
-  std::printf("%12s %10s %10s %12s %10s %13s %12s\n", name.c_str(), "tv_ratio", "tv_err", "energy_bias", "relmse",
-              "flicker_index", "ms/frame");
+  std::error_code ec;
+  std::filesystem::create_directories(o.work, ec);
+  if (ec) throw UsageError("--work " + o.work + ": cannot create the directory (" + ec.message() + ")");
+  experiments::CsvTable csv({name, "tv_ratio", "tv_err", "energy_bias", "relmse", "flicker_index", "ms_per_frame"});
+  bool header = false;
   for (const experiments::Job& job : experiments::ExpandJobs(spec)) {
-    experiments::Measured m = experiments::MeasureJob(job, ro);
-    if (!m.error.empty()) throw std::runtime_error(m.error);
-    const auto& j = m.result.metrics;
+    const experiments::JobResult result = Take(experiments::MeasureJob(job, ro));
+    const auto& j = result.metrics;
+    if (!header) {
+      // As `run` does: the spec's highlight mask, where the reference has highlights.
+      std::printf("region: %s\n", j.value("region", std::string("frame")).c_str());
+      std::printf("%12s %10s %10s %12s %10s %13s %12s\n", name.c_str(), "tv_ratio", "tv_err", "energy_bias",
+                  "relmse", "flicker_index", "ms/frame");
+      header = true;
+    }
     const double fi = experiments::FlickerIndex(j);
     const double tv_ratio = experiments::Metric(j, "tv_ratio"), tv_err = experiments::Metric(j, "tv_err");
     const double bias = experiments::Metric(j, "energy_bias"), relmse = experiments::Metric(j, "relmse");
     const double v = job.params.at(name);
     std::printf("%12.5g %10.4g %10.4g %12.4g %10.4g %13.4g %12.3f\n", v, tv_ratio, tv_err, bias, relmse, fi,
-                m.result.gpu_ms_per_frame);
+                result.gpu_ms_per_frame);
     std::fflush(stdout);
-    csv << v << "," << tv_ratio << "," << tv_err << "," << bias << "," << relmse << "," << fi << ","
-        << m.result.gpu_ms_per_frame << "\n";
+    csv.AddRow({experiments::CsvNumber(v), experiments::CsvNumber(tv_ratio), experiments::CsvNumber(tv_err),
+                experiments::CsvNumber(bias), experiments::CsvNumber(relmse), experiments::CsvNumber(fi),
+                experiments::CsvNumber(result.gpu_ms_per_frame)});
   }
   if (o.csv.empty()) return;
   const std::filesystem::path path(o.csv);
-  if (std::string e = experiments::WriteFileAtomic(path, csv.str()); !e.empty()) throw std::runtime_error(e);
+  Check(WriteFileAtomic(path, csv.Text()));
   // The plot script sits beside the data so users can restyle it.
   std::filesystem::path gp = path, svg = path;
   gp.replace_extension(".gp");
   svg.replace_extension(".svg");
-  std::ostringstream script;
-  script << "set terminal svg size 720,420 dynamic\nset output '" << svg.filename().string() << "'\n"
-         << "set datafile separator ','\nset key autotitle columnhead\nset xlabel '" << name << "'\n"
-         << (o.log ? "set logscale x\n" : "") << "set ylabel 'tv_ratio, flicker_index'\nset y2label 'energy_bias'\n"
-         << "set y2tics\nset ytics nomirror\n"
-         << "plot '" << path.filename().string() << "' using 1:2 with linespoints, '' using 1:6 with linespoints, "
-         << "'' using 1:4 axes x1y2 with linespoints\n";
-  if (std::string e = experiments::WriteFileAtomic(gp, script.str()); !e.empty()) throw std::runtime_error(e);
-  std::vector<std::string> warnings;
-  experiments::RunGnuplot(path.parent_path(), {gp.filename().string()}, &warnings);
-  for (const std::string& w : warnings) std::fprintf(stderr, "shimmer: warning: %s\n", w.c_str());
-  std::printf("wrote %s, %s, %s\n", path.c_str(), gp.c_str(), svg.c_str());
+  auto script = [&](const std::string& output) {
+    std::ostringstream s;
+    s << "set terminal svg size 720,420 dynamic noenhanced\nset output '" << output << "'\n"
+      << "set datafile separator ','\nset key autotitle columnhead\nset xlabel '" << name << "'\n"
+      << (o.log ? "set logscale x\n" : "") << "set ylabel 'tv_ratio, flicker_index'\nset y2label 'energy_bias'\n"
+      << "set y2tics\nset ytics nomirror\n"
+      << "plot '" << path.filename().string() << "' using 1:2 with linespoints, '' using 1:6 with linespoints, "
+      << "'' using 1:4 axes x1y2 with linespoints\n";
+    return s.str();
+  };
+  const auto warning = Take(WritePlot(path.parent_path(), gp.filename().string(), svg.filename().string(), script));
+  if (warning) std::fprintf(stderr, "shimmer: warning: %s\n", warning->c_str());
+  std::printf("wrote %s, %s%s\n", path.c_str(), gp.c_str(), warning ? "" : (", " + svg.string()).c_str());
 }
 
 }  // namespace

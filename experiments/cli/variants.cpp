@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
-#include "shading.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::cli {
 

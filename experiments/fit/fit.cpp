@@ -1,4 +1,4 @@
-#include "fit.h"
+#include "shimmer/experiments/fit.h"
 
 #include <ceres/ceres.h>
 

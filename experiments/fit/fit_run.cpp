@@ -1,12 +1,12 @@
-#include "fit_run.h"
+#include "shimmer/experiments/fit_run.h"
 
 #include <cmath>
 #include <map>
 #include <set>
 
-#include "output_files.h"
-#include "result_store.h"
-#include "scene.h"
+#include "shimmer/experiments/output_files.h"
+#include "shimmer/experiments/result_store.h"
+#include "shimmer/renderer/scene.h"
 
 namespace shimmer::experiments {
 
@@ -21,39 +21,51 @@ double Ratio(double value, double none) {
 // earlier one) is read back, not rendered.
 class CachedMeasure {
  public:
-  CachedMeasure(ResultStore* store, const RunOptions& options) : store_(store), options_(options) {}
+  CachedMeasure(ResultStore* store, const RunOptions& options, const std::function<void(const std::string&)>& progress)
+      : store_(store), options_(options), progress_(progress) {}
 
   const nlohmann::json* Metrics(const Job& job, const std::string& id) {
-    if (!error_.empty()) return nullptr;  // the fit stops at its first failure
+    if (error_) return nullptr;  // the fit stops at its first failure
     if (auto it = cache_.find(id); it != cache_.end()) return &it->second;
-    if (auto row = store_->Get(id)) {
-      wall_s_[id] = row->wall_s;
-      return &(cache_[id] = row->metrics);
+    auto row = store_->Get(id);
+    if (!row) {
+      error_ = row.failure();
+      return nullptr;
     }
-    Measured m = MeasureJob(job, options_);
-    if (m.error.empty()) m.error = store_->Insert(m.result);
-    if (!m.error.empty()) {
-      if (error_.empty()) error_ = m.error;
+    if (*row) {
+      wall_s_[id] = (*row)->wall_s;
+      return &(cache_[id] = (*row)->metrics);
+    }
+    if (progress_) {
+      std::string what = "rendering " + job.scene + " " + job.camera + " " + job.variant;
+      for (const auto& [k, v] : job.params) what += " " + k + "=" + FormatNumber(v);
+      progress_(what);
+    }
+    auto measured = MeasureJob(job, options_);
+    Status stored = measured ? store_->Insert(*measured) : Status(measured.failure());
+    if (!stored) {
+      error_ = stored.failure();
       return nullptr;
     }
     ++rendered_;
-    wall_s_[id] = m.result.wall_s;
-    return &(cache_[id] = m.result.metrics);
+    wall_s_[id] = measured->wall_s;
+    return &(cache_[id] = measured->metrics);
   }
   // Render-and-measure seconds of a job, as recorded when it was computed.
   double WallSeconds(const std::string& id) const {
     auto it = wall_s_.find(id);
     return it == wall_s_.end() ? 0.0 : it->second;
   }
-  const std::string& error() const { return error_; }
+  const std::optional<Error>& error() const { return error_; }
   int rendered() const { return rendered_; }
 
  private:
   ResultStore* store_;
   const RunOptions& options_;
+  const std::function<void(const std::string&)>& progress_;
   std::map<std::string, nlohmann::json> cache_;
   std::map<std::string, double> wall_s_;
-  std::string error_;
+  std::optional<Error> error_;
   int rendered_ = 0;
 };
 
@@ -140,22 +152,29 @@ nlohmann::json MaterialFit::ToJson() const {
           {"defaults", defaults_json}};
 }
 
-FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::function<void(const std::string&)>& log) {
+FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::function<void(const std::string&)>& log,
+                   const std::function<void(const std::string&)>& progress) {
   FitOutcome outcome;
   if (spec.fits.empty()) {
-    outcome.error = "the spec has no \"fit\" section";
+    outcome.error = Error{ErrorCode::kBadInput, "the spec has no \"fit\" section"};
     return outcome;
   }
-  auto [store, error] = ResultStore::Open(options.db_path);
-  if (!store) {
-    outcome.error = error;
+  auto lock = StoreLock::Acquire(options.db_path);
+  if (!lock) {
+    outcome.error = lock.failure();
     return outcome;
   }
-  CachedMeasure measure(store.get(), options);
+  auto opened = ResultStore::Open(options.db_path);
+  if (!opened) {
+    outcome.error = opened.failure();
+    return outcome;
+  }
+  std::unique_ptr<ResultStore> store = std::move(*opened);
+  CachedMeasure measure(store.get(), options, progress);
   for (const FitConfig& config : spec.fits)
     for (const std::string& variant : config.variants) {
       for (const std::string& material : spec.materials) {
-        const shading::MaterialDesc desc = scene::ParseMaterial(material, {}).value;
+        const shading::MaterialDesc desc = *scene::ParseMaterial(material, {});
         std::set<std::string> used;
         Objective objective{spec, config, material, variant, measure, &used};
         MaterialFit fit;
@@ -179,17 +198,17 @@ FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::funct
           fit.train_defaults.push_back(objective(d, config.train));
           fit.validate_defaults.push_back(objective(d, config.validate));
         }
-        if (!measure.error().empty()) {
-          outcome.error = variant + " on " + material + ": " + measure.error();
+        if (measure.error()) {
+          outcome.error = Prefixed(variant + " on " + material, *measure.error());
           return outcome;
         }
         // The cost of the evaluations as recorded when each was computed, so
         // a rerun served from the cache reports the same time.
         for (const std::string& id : used) fit.seconds += measure.WallSeconds(id);
-        if (std::string e = store->InsertFit(variant, config.param, material, fit.search.best, fit.train.j,
-                                            fit.validate.j, fit.ToJson());
-            !e.empty()) {
-          outcome.error = options.db_path + ": " + e;
+        if (Status s = store->InsertFit(variant, config.param, material, fit.search.best, fit.train.j,
+                                        fit.validate.j, fit.ToJson());
+            !s) {
+          outcome.error = s.failure();
           return outcome;
         }
         if (log) {

@@ -1,11 +1,12 @@
-#include "fit_report.h"
+#include "shimmer/experiments/fit_report.h"
 
 #include <algorithm>
 #include <filesystem>
 #include <map>
 #include <sstream>
 
-#include "output_files.h"
+#include "shimmer/core/gnuplot.h"
+#include "shimmer/experiments/output_files.h"
 
 namespace shimmer::experiments {
 
@@ -23,13 +24,12 @@ std::string Shots(const ShotSet& s) { return "scenes " + Join(s.scenes) + " × c
 
 }  // namespace
 
-std::string WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::string& out_dir,
-                           std::vector<std::string>* warnings) {
-  if (outcome.fits.empty()) return "no fits to report";
-  const fs::path out(out_dir);
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) return out.string() + ": cannot create the report directory: " + ec.message();
+Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::string& out_dir,
+                      std::vector<std::string>* warnings) {
+  if (outcome.fits.empty()) return Status::Failure("no fits to report");
+  auto staged = StagedDirectory::Create(out_dir);
+  if (!staged) return staged.failure();
+  StagedDirectory& out = **staged;
 
   nlohmann::json all = {{"spec", spec.name}, {"fits", nlohmann::json::array()}, {"laws", nlohmann::json::array()}};
   for (const MaterialFit& f : outcome.fits) all["fits"].push_back(f.ToJson());
@@ -43,7 +43,7 @@ std::string WriteFitReport(const FitOutcome& outcome, const Spec& spec, const st
                            {"alpha", l.alpha},
                            {"value", l.value},
                            {"log_residuals", l.law.residuals}});
-  if (std::string e = WriteFileAtomic(out / "fit.json", all.dump(2) + "\n"); !e.empty()) return e;
+  if (Status s = out.Write("fit.json", all.dump(2) + "\n"); !s) return s;
 
   std::ostringstream md;
   md << "# Fitted filter parameters: " << spec.name << "\n\n"
@@ -79,7 +79,7 @@ std::string WriteFitReport(const FitOutcome& outcome, const Spec& spec, const st
     for (std::size_t i = 0; i < first.defaults.size(); ++i) md << "---|---|";
     md << "---|---|\n";
     std::ostringstream data, plot;
-    plot << "set terminal svg size 900,560 dynamic\nset output '" << slug << ".svg'\n"
+    plot << "set terminal svg size 900,560 dynamic noenhanced\nset output '" << slug << ".svg'\n"
          << "set title '" << first.variant << ": training objective J(" << first.param << ")'\n"
          << "set xlabel '" << first.param << "'\nset ylabel 'J'\nset logscale x\nset key outside right font ',9'\n"
          << "plot ";
@@ -120,13 +120,14 @@ std::string WriteFitReport(const FitOutcome& outcome, const Spec& spec, const st
            << FormatNumber(l.law.residuals[i], "%+.3f") << " |\n";
     }
     md << "\n";
-    if (std::string e = WriteFileAtomic(out / (slug + ".dat"), data.str()); !e.empty()) return e;
-    if (std::string e = WriteFileAtomic(out / (slug + ".gp"), plot.str()); !e.empty()) return e;
+    if (Status s = out.Write(slug + ".dat", data.str()); !s) return s;
+    if (Status s = out.Write(slug + ".gp", plot.str()); !s) return s;
     scripts.push_back(slug + ".gp");
   }
-  if (std::string e = WriteFileAtomic(out / "fit.md", md.str()); !e.empty()) return e;
-  RunGnuplot(out, scripts, warnings);
-  return "";
+  for (const std::string& script : scripts)
+    if (Status s = RunGnuplot(out.staging(), script); !s && warnings) warnings->push_back(s.error());
+  if (Status s = out.Write("fit.md", md.str()); !s) return s;
+  return out.Commit("fit.md");
 }
 
 }  // namespace shimmer::experiments

@@ -1,4 +1,4 @@
-#include "runner.h"
+#include "shimmer/experiments/runner.h"
 
 #include <atomic>
 #include <chrono>
@@ -10,8 +10,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "renderer.h"
-#include "scene.h"
+#include "shimmer/core/sequence_file.h"
+
+#include "shimmer/renderer/renderer.h"
+#include "shimmer/renderer/scene.h"
 #include "shimmer/metrics/metrics_report.h"
 
 namespace shimmer::experiments {
@@ -20,88 +22,86 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string SettingsFor(const Job& job, const RunOptions& options, render::RenderSettings* s) {
-  auto scene = scene::LoadScene(job.scene);
-  if (!scene.ok()) return scene.error;
-  auto material = scene::ParseMaterial(job.material, scene.value.material);
-  if (!material.ok()) return material.error;
-  s->scene = scene.value;
-  s->material = material.value;
-  s->camera = job.camera;
-  s->fps = job.fps;
-  s->width = job.width;
-  s->height = job.height;
-  s->frames = job.frames;
-  s->variant = job.variant;
-  s->param_overrides.assign(job.params.begin(), job.params.end());
-  s->derivatives = job.derivatives == "analytic"      ? shading::DerivativeSource::kAnalytic
-                   : job.derivatives == "quad-coarse" ? shading::DerivativeSource::kQuadCoarse
-                                                      : shading::DerivativeSource::kQuadFine;
-  s->device = options.device;
-  s->compress_exr = options.keep_frames;  // else measured once and deleted
-  return "";
-}
-
 // Renders into dir.partial and renames: a directory under its final name is
-// always a complete sequence.
-std::string RenderInto(const render::RenderSettings& settings, const fs::path& dir) {
-  if (fs::exists(dir / "sequence.json")) return "";
+// always a complete sequence. Returns its sequence.json.
+Result<SequenceFile> RenderInto(const render::RenderSettings& settings, const fs::path& dir) {
+  if (fs::exists(dir / "sequence.json")) {
+    auto done = ReadSequenceFile(dir / "sequence.json");
+    if (done && done->status == SequenceStatus::kComplete) return done;
+  }
   const fs::path partial = dir.string() + ".partial";
   std::error_code ec;
   fs::remove_all(partial, ec);
   fs::create_directories(partial.parent_path(), ec);
-  std::string error = render::RenderSequence(settings, partial.string(), {});
-  if (!error.empty()) {
+  auto rendered = render::RenderSequence(settings, partial.string(), {});
+  if (!rendered) {
     fs::remove_all(partial, ec);
-    return error;
+    return rendered.failure();
   }
   fs::remove_all(dir, ec);
   fs::rename(partial, dir, ec);
-  if (ec) return dir.string() + ": cannot rename the rendered sequence: " + ec.message();
-  return "";
+  if (ec)
+    return Result<SequenceFile>::Failure(dir.string() + ": cannot rename the rendered sequence (" + ec.message() + ")",
+                                         ErrorCode::kIo);
+  return rendered;
 }
-
-double MeanGpuMs(const fs::path& dir) {
-  std::ifstream in(dir / "sequence.json");
-  nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-  if (j.is_discarded() || !j.contains("frames")) return 0;
-  double sum = 0;
-  int n = 0;
-  for (const auto& f : j["frames"]) {
-    if (f.contains("gpu_ms")) sum += f["gpu_ms"].get<double>(), ++n;
-  }
-  return n ? sum / n : 0;
-}
-
-}  // namespace
 
 fs::path ReferenceDir(const Job& job, const RunOptions& options) {
   return fs::path(options.work_dir) / ("ref-" + ReferenceId(job));
 }
 
-std::string EnsureReference(const Job& job, const RunOptions& options) {
-  render::RenderSettings reference;
-  if (std::string e = SettingsFor(job, options, &reference); !e.empty()) return e;
-  reference.variant = "none";
-  reference.param_overrides.clear();
-  reference.reference_spp = job.reference.spp;
-  reference.reference_tolerance = job.reference.tolerance;
-  return RenderInto(reference, ReferenceDir(job, options));
+}  // namespace
+
+Result<render::RenderSettings> JobSettings(const Job& job, const RunOptions& options) {
+  using R = Result<render::RenderSettings>;
+  render::RenderSettings s;
+  auto scene = scene::LoadScene(job.scene);
+  if (!scene) return Prefixed("scene", scene.failure());
+  auto material = scene::ParseMaterial(job.material, scene->material);
+  if (!material) return material.failure();
+  const auto camera = scene::ParseCameraPath(job.camera);
+  if (!camera) return R::Failure("camera: unknown camera path '" + job.camera + "'");
+  const auto derivatives = shading::ParseDerivativeSource(job.derivatives);
+  if (!derivatives)
+    return R::Failure("derivatives: '" + job.derivatives + "' must be " + std::string(shading::kDerivativeSourceList));
+  s.scene = *scene;
+  s.material = *material;
+  s.camera = *camera;
+  s.fps = job.fps;
+  s.width = job.width;
+  s.height = job.height;
+  s.frames = job.frames;
+  s.variant = job.variant;
+  s.param_overrides.assign(job.params.begin(), job.params.end());
+  s.derivatives = *derivatives;
+  s.device = options.device;
+  s.compress_exr = options.keep_frames;  // else measured once and deleted
+  if (Status v = render::ValidateSettings(s); !v) return v.failure();
+  return s;
 }
 
-Measured MeasureJob(const Job& job, const RunOptions& options) {
-  Measured m;
+Status EnsureReference(const Job& job, const RunOptions& options) {
+  auto reference = JobSettings(job, options);
+  if (!reference) return reference.failure();
+  reference->variant = "none";
+  reference->param_overrides.clear();
+  reference->reference_spp = job.reference.spp;
+  reference->reference_tolerance = job.reference.tolerance;
+  auto rendered = RenderInto(*reference, ReferenceDir(job, options));
+  if (!rendered) return Prefixed("reference", rendered.failure());
+  return Ok();
+}
+
+Result<JobResult> MeasureJob(const Job& job, const RunOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
-  render::RenderSettings test;
-  m.error = SettingsFor(job, options, &test);
-  if (!m.error.empty()) return m;
+  auto test = JobSettings(job, options);
+  if (!test) return test.failure();
   const std::string id = JobId(job), ref_id = ReferenceId(job);
   const fs::path ref_dir = ReferenceDir(job, options);
   const fs::path job_dir = fs::path(options.work_dir) / ("job-" + id);
-  m.error = EnsureReference(job, options);
-  if (!m.error.empty()) return m;
-  m.error = RenderInto(test, job_dir);
-  if (!m.error.empty()) return m;
+  if (Status s = EnsureReference(job, options); !s) return s.failure();
+  auto rendered = RenderInto(*test, job_dir);
+  if (!rendered) return rendered.failure();
 
   metrics::MetricsOptions mo;
   mo.test = job_dir;
@@ -111,34 +111,52 @@ Measured MeasureJob(const Job& job, const RunOptions& options) {
   mo.highlight.empty_falls_back_to_frame = true;
   mo.segment_length = job.metrics.segment;
   auto report = metrics::ComputeMetrics(mo);
-  if (!report.ok()) {
-    m.error = report.error();
-    return m;
-  }
-  m.result.id = id;
-  m.result.reference_id = ref_id;
-  m.result.job = job;
-  m.result.metrics = metrics::ToJson(report.value());
-  m.result.gpu_ms_per_frame = MeanGpuMs(job_dir);
-  m.result.revision = render::SourceRevision();
-  m.result.core_version = ShadingCoreVersion();
-  m.result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!report) return report.failure();
+  JobResult r;
+  r.id = id;
+  r.reference_id = ref_id;
+  r.job = job;
+  r.metrics = metrics::ToJson(*report);
+  r.gpu_ms_per_frame = rendered->MeanGpuMs();
+  r.revision = render::SourceRevision();
+  r.core_version = ShadingCoreVersion();
+  r.device = rendered->device;
+  r.driver = rendered->driver;
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!options.keep_frames) {
     std::error_code ec;
     fs::remove_all(job_dir, ec);
   }
-  return m;
+  return r;
 }
 
 RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) {
   RunSummary summary;
   const std::vector<Job> jobs = ShardOf(all_jobs, options.shard_index, options.shard_count);
   summary.total = int(jobs.size());
-  auto [store, error] = ResultStore::Open(options.db_path);
-  if (!store) {
-    summary.error = error;
+  // Bad input is found before anything is created.
+  for (const Job& job : jobs) {
+    auto settings = JobSettings(job, options);
+    if (!settings) {
+      summary.error = Prefixed("job " + JobId(job) + " (" + job.scene + " " + job.material + " " + job.camera + " " +
+                                   job.variant + ")",
+                               settings.failure());
+      return summary;
+    }
+  }
+  auto lock = StoreLock::Acquire(options.db_path);
+  if (!lock) {
+    summary.error = lock.failure();
     return summary;
   }
+  std::error_code exists_ec;
+  const bool store_existed = fs::exists(options.db_path, exists_ec);
+  auto opened = ResultStore::Open(options.db_path);
+  if (!opened) {
+    summary.error = opened.failure();
+    return summary;
+  }
+  std::unique_ptr<ResultStore> store = std::move(*opened);
   // One lock per shared reference, so two workers never render the same one.
   std::map<std::string, std::mutex> reference_locks;
   for (const Job& job : jobs) reference_locks[ReferenceId(job)];
@@ -156,31 +174,37 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
       const Job& job = jobs[k];
       const std::string id = JobId(job);
       const std::string what = job.scene + " " + job.material + " " + job.camera + " " + job.variant;
-      bool done;
+      Result<bool> done = false;
       {
         std::lock_guard<std::mutex> lock(mutex);
         done = store->Has(id);
       }
+      auto stop = [&](const Error& e) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!failed.exchange(true)) summary.error = Prefixed("job " + id + " (" + what + ")", e);
+      };
+      if (!done) return stop(done.failure());
       double seconds = 0;
-      if (!done) {
+      if (!*done) {
         const auto t0 = std::chrono::steady_clock::now();
-        std::string e;
+        Status reference = Ok();
         {
           std::lock_guard<std::mutex> lock(reference_locks.at(ReferenceId(job)));
-          e = EnsureReference(job, options);
+          reference = EnsureReference(job, options);
         }
-        Measured m;
-        if (e.empty()) m = MeasureJob(job, options), e = m.error;
-        std::lock_guard<std::mutex> lock(mutex);
-        if (e.empty()) e = store->Insert(m.result);
-        if (!e.empty()) {
-          if (!failed.exchange(true)) summary.error = "job " + id + " (" + what + "): " + e;
-          return;
+        if (!reference) return stop(reference.failure());
+        auto measured = MeasureJob(job, options);
+        if (!measured) return stop(measured.failure());
+        Status inserted = Ok();
+        {
+          std::lock_guard<std::mutex> lock(mutex);
+          inserted = store->Insert(*measured);
         }
+        if (!inserted) return stop(inserted.failure());
         seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       }
       std::lock_guard<std::mutex> lock(mutex);
-      if (done) ++summary.skipped; else ++summary.computed, computed_s += seconds;
+      if (*done) ++summary.skipped; else ++summary.computed, computed_s += seconds;
       ++progress.done;
       progress.skipped = summary.skipped;
       progress.current = what;
@@ -195,7 +219,15 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
   for (int i = 1; i < std::max(1, options.jobs); ++i) threads.emplace_back(worker);
   worker();
   for (std::thread& t : threads) t.join();
-  if (failed) return summary;
+  if (failed) {
+    // A store this run created and put nothing into is not left behind.
+    store.reset();
+    if (!store_existed && summary.computed == 0) {
+      std::error_code ec;
+      for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(options.db_path + suffix, ec);
+    }
+    return summary;
+  }
 
   if (!options.keep_frames) {
     std::error_code ec;

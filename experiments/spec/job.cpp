@@ -1,8 +1,8 @@
-#include "job.h"
+#include "shimmer/experiments/job.h"
 
 #include <cstdio>
 
-#include "shading.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::experiments {
 
@@ -76,7 +76,8 @@ Job SpecJob(const Spec& spec, const std::string& scene, const std::string& mater
 }
 
 bool ReadsDerivatives(const std::string& variant) {
-  return variant != "none" && variant.rfind("supersample-", 0) != 0;
+  auto name = shading::ParseVariantName(variant);
+  return !name || name->reads_derivatives();
 }
 
 std::vector<Job> ExpandJobs(const Spec& spec) {
@@ -121,11 +122,14 @@ std::string JobId(const Job& job) {
   // default spelled out in a spec is the same job and a changed default is not.
   if (const shading::VariantInfo* info = shading::FindVariant(job.variant)) {
     const std::vector<std::pair<std::string, double>> overrides(job.params.begin(), job.params.end());
-    const shading::Params<double> p = shading::ResolveParams(*info, overrides).values;
-    json resolved = json::object();
-    for (const shading::ParamInfo& param : info->params)
-      resolved[std::string(param.name)] = shading::ParamValue(p, param.name);
-    j["params"] = resolved;
+    // Jobs come from validated specs; one that does not resolve (it will
+    // fail when run) keeps its parameters as given.
+    if (const auto p = shading::ResolveParams(*info, overrides)) {
+      json values = json::object();
+      for (const shading::ParamInfo& param : info->params)
+        values[std::string(param.name)] = shading::ParamValue(*p, param.name);
+      j["params"] = values;
+    }
   }
   return Fnv1a64Hex(j.dump());  // nlohmann objects are key-sorted: canonical
 }

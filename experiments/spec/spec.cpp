@@ -1,14 +1,18 @@
-#include "spec.h"
+#include "shimmer/experiments/spec.h"
 
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
-#include "scene.h"
-#include "shading.h"
+#include "shimmer/core/json_file.h"
+#include "shimmer/renderer/renderer.h"
+#include "shimmer/renderer/scene.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::experiments {
 
@@ -59,10 +63,41 @@ double Number(const json& j, const std::string& key) {
   return v;
 }
 
-int PositiveInt(const json& j, const std::string& key) {
-  if (!j.is_number_integer() || j.get<long long>() <= 0 || j.get<long long>() > 1 << 20)
-    throw SpecError{key, "must be a positive integer, found " + j.dump()};
+// Every count is bounded, so that no spec can ask for work that never ends
+// or memory that is never there; the limit is in the message.
+int PositiveInt(const json& j, const std::string& key, int max_value) {
+  if (!j.is_number_integer() || j.get<long long>() <= 0 || j.get<long long>() > max_value)
+    throw SpecError{key, "must be an integer in 1.." + std::to_string(max_value) + ", found " + Quote(j)};
   return j.get<int>();
+}
+
+std::string Short(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
+// A spec's name names its directories (runs/<name>/...): one path component.
+void CheckName(const std::string& name) {
+  if (name.empty() || name.size() > 64) throw SpecError{"name", "must be 1 to 64 characters"};
+  if (name.front() == '.' || name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789._-") != std::string::npos)
+    throw SpecError{"name", "must be letters, digits, '.', '_' or '-', not starting with '.' (it names the run's "
+                            "directory), found " + Quote(json(name))};
+}
+
+shading::DerivativeSource Derivatives(const json& j, const std::string& key) {
+  const auto source = j.is_string() ? shading::ParseDerivativeSource(j.get<std::string>()) : std::nullopt;
+  if (!source)
+    throw SpecError{key, "must be " + std::string(shading::kDerivativeSourceList) + ", found " + Quote(j)};
+  return *source;
+}
+
+void CheckCamera(const std::string& c) {
+  if (!scene::ParseCameraPath(c)) {
+    std::string list;
+    for (auto n : scene::CameraPathNames()) list += (list.empty() ? "" : ", ") + std::string(n);
+    throw SpecError{c, "unknown camera path (" + list + ")"};
+  }
 }
 
 // A list of numbers, or {"from", "to", "steps", "scale": "linear|log"}.
@@ -79,7 +114,8 @@ std::vector<double> ParameterValues(const json& j, const std::string& key) {
   for (const char* k : {"from", "to", "steps"})
     if (!j.contains(k)) throw SpecError{key, std::string("range needs \"") + k + "\""};
   const double from = Number(j["from"], key + ".from"), to = Number(j["to"], key + ".to");
-  const int steps = PositiveInt(j["steps"], key + ".steps");
+  const int steps = PositiveInt(j["steps"], key + ".steps", kMaxRangeSteps);
+  if (j.contains("scale") && !j["scale"].is_string()) throw SpecError{key, "scale must be \"linear\" or \"log\""};
   const std::string scale = j.value("scale", "linear");
   if (scale != "linear" && scale != "log") throw SpecError{key, "scale must be \"linear\" or \"log\""};
   if (scale == "log" && (from <= 0 || to <= 0)) throw SpecError{key, "a log range needs from > 0 and to > 0"};
@@ -106,21 +142,19 @@ VariantSweep ParseVariant(const json& j) {
   } else {
     throw SpecError{"variants", "entries must be a name or {\"name\", \"params\"}"};
   }
+  const auto parsed = shading::ParseVariantName(v.name);
+  if (!parsed) throw SpecError{v.name, parsed.error()};
   // supersample-N is the renderer's equal-time baseline, not a catalogue entry.
-  if (v.name.rfind("supersample-", 0) == 0) {
-    const std::string n = v.name.substr(12);
-    if (n.empty() || n.find_first_not_of("0123456789") != std::string::npos || std::stoi(n) < 1 || std::stoi(n) > 64)
-      throw SpecError{v.name, "supersample-N needs N between 1 and 64"};
+  if (parsed->kind == shading::VariantName::Kind::kSupersample) {
     if (!v.params.empty()) throw SpecError{v.name, "supersample-N takes no parameters"};
     return v;
   }
-  const shading::VariantInfo* info = shading::FindVariant(v.name);
-  if (!info) throw SpecError{v.name, "unknown variant (see `shimmer variants`)"};
   for (const auto& [name, values] : v.params) {
-    std::vector<std::pair<std::string, double>> overrides;
-    for (double x : values) overrides.push_back({name, x});
-    const auto resolved = shading::ResolveParams(*info, overrides);
-    if (!resolved.error.empty()) throw SpecError{name, resolved.error};
+    for (double x : values) {
+      const std::pair<std::string, double> value{name, x};
+      const auto resolved = shading::ResolveParams(*parsed->info, std::span(&value, 1));
+      if (!resolved) throw SpecError{name, resolved.error()};
+    }
   }
   return v;
 }
@@ -134,11 +168,10 @@ ShotSet ParseShots(const json& j, const std::string& key) {
   shots.scenes = StringList(j["scenes"], key + ".scenes");
   for (const std::string& scene : shots.scenes) {
     const auto loaded = scene::LoadScene(scene);
-    if (!loaded.ok()) throw SpecError{scene, loaded.error};
+    if (!loaded) throw SpecError{scene, loaded.error()};
   }
   shots.cameras = StringList(j["cameras"], key + ".cameras");
-  for (const std::string& c : shots.cameras)
-    if (!scene::IsCameraPath(c)) throw SpecError{c, "unknown camera path (orbit, pan, dolly, vr-jitter)"};
+  for (const std::string& c : shots.cameras) CheckCamera(c);
   return shots;
 }
 
@@ -171,7 +204,7 @@ FitConfig ParseFit(const json& f, const Spec& spec) {
                                 (names.empty() ? "none" : names) + ")"};
     if (info->ggx_only)
       for (const std::string& m : spec.materials)
-        if (scene::ParseMaterial(m, {}).value.ndf != shading::Ndf::kGgx)
+        if (scene::ParseMaterial(m, {})->ndf != shading::Ndf::kGgx)
           throw SpecError{name, "takes GGX materials only, and the spec lists " + m};
   }
   if (f.contains("bounds")) {
@@ -182,21 +215,18 @@ FitConfig ParseFit(const json& f, const Spec& spec) {
   }
   // The search runs on log p, so the bounds must be positive.
   if (!(c.lo > 0 && c.lo < c.hi))
-    throw SpecError{"bounds", "are empty or not positive: need 0 < lo < hi, found [" + std::to_string(c.lo) + ", " +
-                                  std::to_string(c.hi) + "]"};
-  if (f.contains("sweep_points")) c.sweep_points = PositiveInt(f["sweep_points"], "sweep_points");
+    throw SpecError{"bounds", "are empty or not positive: need 0 < lo < hi, found [" + Short(c.lo) + ", " +
+                                  Short(c.hi) + "]"};
+  if (Status s = shading::ValidateParam(c.param, c.hi); !s) throw SpecError{"bounds", s.error()};
+  if (f.contains("sweep_points")) c.sweep_points = PositiveInt(f["sweep_points"], "sweep_points", kMaxSweepPoints);
   if (c.sweep_points < 2) throw SpecError{"sweep_points", "must be at least 2"};
   if (f.contains("defaults")) {
     c.defaults = ParameterValues(f["defaults"], "defaults");
     for (double d : c.defaults)
       if (d <= 0) throw SpecError{"defaults", "must be positive"};
   }
-  if (f.contains("derivatives")) {
-    if (!f["derivatives"].is_string()) throw SpecError{"derivatives", "must be quad, quad-coarse or analytic"};
-    c.derivatives = f["derivatives"];
-    if (c.derivatives != "quad" && c.derivatives != "quad-coarse" && c.derivatives != "analytic")
-      throw SpecError{"derivatives", "must be quad, quad-coarse or analytic, found \"" + c.derivatives + "\""};
-  }
+  if (f.contains("derivatives"))
+    c.derivatives = std::string(shading::DerivativeSourceName(Derivatives(f["derivatives"], "derivatives")));
   c.train = ParseShots(f["train"], "train");
   c.validate = ParseShots(f["validate"], "validate");
   if (f.contains("weights")) {
@@ -222,49 +252,46 @@ Spec ParseSpecObject(const json& j) {
   Spec s;
   for (const char* required : {"name", "scenes", "materials", "cameras", "variants"})
     if (!j.contains(required)) throw SpecError{required, "is required"};
-  if (!j["name"].is_string() || j["name"].get<std::string>().empty())
-    throw SpecError{"name", "must be a non-empty string"};
+  if (!j["name"].is_string()) throw SpecError{"name", "must be a string"};
   s.name = j["name"];
+  CheckName(s.name);
   s.scenes = StringList(j["scenes"], "scenes");
   for (const std::string& scene : s.scenes) {
     const auto loaded = scene::LoadScene(scene);
-    if (!loaded.ok()) throw SpecError{scene, loaded.error};
+    if (!loaded) throw SpecError{scene, loaded.error()};
   }
   s.materials = StringList(j["materials"], "materials");
   for (const std::string& m : s.materials) {
     const auto parsed = scene::ParseMaterial(m, {});
-    if (!parsed.ok()) throw SpecError{m, parsed.error};
+    if (!parsed) throw SpecError{m, parsed.error()};
   }
   s.cameras = StringList(j["cameras"], "cameras");
-  for (const std::string& c : s.cameras)
-    if (!scene::IsCameraPath(c)) throw SpecError{c, "unknown camera path (orbit, pan, dolly, vr-jitter)"};
+  for (const std::string& c : s.cameras) CheckCamera(c);
   if (!j["variants"].is_array() || j["variants"].empty())
     throw SpecError{"variants", "must be a non-empty array"};
   for (const json& v : j["variants"]) s.variants.push_back(ParseVariant(v));
   if (j.contains("derivatives")) {
     s.derivatives = StringList(j["derivatives"], "derivatives");
-    for (const std::string& d : s.derivatives)
-      if (d != "quad" && d != "quad-coarse" && d != "analytic")
-        throw SpecError{"derivatives", "must be quad, quad-coarse or analytic, found \"" + d + "\""};
+    for (std::string& d : s.derivatives) d = std::string(shading::DerivativeSourceName(Derivatives(d, "derivatives")));
   }
   if (j.contains("size")) {
     const json& size = j["size"];
     if (!size.is_array() || size.size() != 2) throw SpecError{"size", "must be [width, height]"};
-    s.width = PositiveInt(size[0], "size");
-    s.height = PositiveInt(size[1], "size");
+    s.width = PositiveInt(size[0], "size", render::kMaxImageSide);
+    s.height = PositiveInt(size[1], "size", render::kMaxImageSide);
     if (s.width % 2 || s.height % 2) throw SpecError{"size", "width and height must be even (2x2 quads)"};
   }
-  if (j.contains("frames")) s.frames = PositiveInt(j["frames"], "frames");
+  if (j.contains("frames")) s.frames = PositiveInt(j["frames"], "frames", kMaxSpecFrames);
   if (s.frames < 2) throw SpecError{"frames", "temporal metrics need at least 2 frames"};
   if (j.contains("fps")) {
     s.fps = Number(j["fps"], "fps");
-    if (s.fps <= 0) throw SpecError{"fps", "must be > 0"};
+    if (s.fps <= 0 || s.fps > 1e6) throw SpecError{"fps", "must be > 0 and <= 1e6"};
   }
   if (j.contains("reference")) {
     const json& r = j["reference"];
     if (!r.is_object()) throw SpecError{"reference", "must be {\"spp\": N} or {\"tolerance\": T}"};
     RejectUnknownKeys(r, {"spp", "tolerance"}, "reference");
-    if (r.contains("spp")) s.reference.spp = PositiveInt(r["spp"], "spp");
+    if (r.contains("spp")) s.reference.spp = PositiveInt(r["spp"], "spp", render::kMaxReferenceSpp);
     if (r.contains("tolerance")) {
       s.reference.tolerance = Number(r["tolerance"], "tolerance");
       if (s.reference.tolerance <= 0 || s.reference.tolerance >= 1)
@@ -283,7 +310,7 @@ Spec ParseSpecObject(const json& j) {
       s.metrics.highlight_threshold = Number(m["highlight_threshold"], "highlight_threshold");
       if (s.metrics.highlight_threshold <= 0) throw SpecError{"highlight_threshold", "must be > 0"};
     }
-    if (m.contains("segment")) s.metrics.segment = PositiveInt(m["segment"], "segment");
+    if (m.contains("segment")) s.metrics.segment = PositiveInt(m["segment"], "segment", s.frames);
   }
   if (j.contains("fit")) {
     const json& f = j["fit"];
@@ -295,44 +322,47 @@ Spec ParseSpecObject(const json& j) {
       throw SpecError{"fit", "must be an object or a non-empty list of objects"};
     }
   }
+  // Counted before anything is expanded: a cross product can be astronomically large.
+  double combos = 0;
+  for (const VariantSweep& v : s.variants) {
+    double n = 1;
+    for (const auto& [name, values] : v.params) n *= double(values.size());
+    combos += n;
+  }
+  const double jobs = double(s.scenes.size()) * double(s.materials.size()) * double(s.cameras.size()) * combos *
+                      double(s.derivatives.size());
+  if (jobs > double(kMaxJobs))
+    throw SpecError{"variants", "the spec expands to " + Short(jobs) + " jobs; at most " + std::to_string(kMaxJobs) +
+                                    " are supported (split it into several specs)"};
   return s;
 }
 
 }  // namespace
 
-SpecResult ParseSpec(std::string_view text, const std::string& source) {
-  SpecResult result;
-  json j;
+Result<Spec> ParseSpec(std::string_view text, const std::string& source) {
+  auto j = ParseJson(text, source);
+  if (!j) return j.failure();
   try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    // nlohmann reports the byte offset; turn it into a line.
-    const std::size_t at = std::min<std::size_t>(e.byte, text.size());
-    const int line = 1 + int(std::count(text.begin(), text.begin() + at, '\n'));
-    result.error = source + ":" + std::to_string(line) + ": not valid JSON (" + e.what() + ")";
-    return result;
-  }
-  try {
-    result.spec = ParseSpecObject(j);
+    return ParseSpecObject(*j);
   } catch (const SpecError& e) {
     const int line = e.key.empty() ? 0 : LineOfKey(text, e.key);
-    result.error = source + (line ? ":" + std::to_string(line) : "") + ": " + (e.key.empty() ? "" : e.key + ": ") +
-                   e.problem;
+    return Result<Spec>::Failure(source + (line ? ":" + std::to_string(line) : "") + ": " +
+                                 (e.key.empty() ? "" : e.key + ": ") + e.problem);
   } catch (const json::exception& e) {
-    result.error = source + ": " + e.what();
+    // A type the checks above missed; nlohmann's id prefix says nothing to a user.
+    std::string what = e.what();
+    if (auto close = what.find("] "); close != std::string::npos) what = what.substr(close + 2);
+    return Result<Spec>::Failure(source + ": " + what);
   }
-  return result;
 }
 
-SpecResult LoadSpec(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) {
-    SpecResult r;
-    r.error = path + ": cannot read the spec file";
-    return r;
-  }
+Result<Spec> LoadSpec(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return Result<Spec>::Failure(path + ": no such spec file");
+  std::ifstream in(path, std::ios::binary);
   std::stringstream buffer;
   buffer << in.rdbuf();
+  if (!in && !in.eof()) return Result<Spec>::Failure(path + ": cannot read the spec file", ErrorCode::kIo);
   return ParseSpec(buffer.str(), path);
 }
 

@@ -1,9 +1,17 @@
-#include "result_store.h"
+#include "shimmer/experiments/result_store.h"
 
 #include <sqlite3.h>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
 #include <filesystem>
+#include <set>
+
+#include "shimmer/core/atomic_file.h"
 
 namespace shimmer::experiments {
 
@@ -23,7 +31,8 @@ CREATE TABLE IF NOT EXISTS jobs (
   job TEXT NOT NULL,
   gpu_ms_per_frame REAL, wall_s REAL,
   revision TEXT, core_version TEXT,
-  finished_at TEXT DEFAULT (datetime('now'))
+  finished_at TEXT DEFAULT (datetime('now')),
+  device TEXT, driver TEXT
 );
 CREATE TABLE IF NOT EXISTS fits (
   variant TEXT NOT NULL, param TEXT NOT NULL, material TEXT NOT NULL,
@@ -39,6 +48,42 @@ struct Statement {
   ~Statement() { sqlite3_finalize(stmt); }
 };
 
+// Columns of `jobs` in the order Insert writes them; a store from before a
+// column existed reads NULL for it.
+const char* kJobColumns[] = {"id", "reference_id", "scene", "material", "camera", "variant", "params",
+                             "derivatives", "width", "height", "frames", "fps", "reference_spp",
+                             "reference_tolerance", "tv_ratio", "tv_err", "energy_bias", "temporal_diff_err",
+                             "relmse", "flicker_index", "metrics", "job", "gpu_ms_per_frame", "wall_s", "revision",
+                             "core_version", "finished_at", "device", "driver"};
+
+std::string SqlQuote(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
+std::set<std::string> ColumnsOf(sqlite3* db, const std::string& schema) {
+  std::set<std::string> columns;
+  Statement s;
+  if (sqlite3_prepare_v2(db, ("PRAGMA " + schema + ".table_info(jobs)").c_str(), -1, &s.stmt, nullptr) != SQLITE_OK)
+    return columns;
+  while (sqlite3_step(s.stmt) == SQLITE_ROW)
+    columns.insert(reinterpret_cast<const char*>(sqlite3_column_text(s.stmt, 1)));
+  return columns;
+}
+
+Status ExecOn(sqlite3* db, const std::string& sql) {
+  char* message = nullptr;
+  if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
+    std::string error = message ? message : "sqlite error";
+    sqlite3_free(message);
+    const int code = sqlite3_errcode(db);
+    const bool io = code == SQLITE_IOERR || code == SQLITE_FULL || code == SQLITE_READONLY || code == SQLITE_CANTOPEN;
+    return Status::Failure(error, io ? ErrorCode::kIo : ErrorCode::kBadInput);
+  }
+  return Ok();
+}
+
 }  // namespace
 
 double Metric(const nlohmann::json& metrics, const char* key) {
@@ -49,52 +94,108 @@ double FlickerIndex(const nlohmann::json& metrics) {
   return metrics.contains("flicker") ? Metric(metrics["flicker"], "flicker_index") : std::nan("");
 }
 
-ResultStore::ResultStore(sqlite3* db) : db_(db) {}
+ResultStore::ResultStore(sqlite3* db, std::string path) : db_(db), path_(std::move(path)) {}
 ResultStore::~ResultStore() { sqlite3_close(db_); }
 
-std::pair<std::unique_ptr<ResultStore>, std::string> ResultStore::Open(const std::string& path) {
+Error ResultStore::Failure(const std::string& what) const {
+  const int code = sqlite3_errcode(db_);
+  const bool io = code == SQLITE_IOERR || code == SQLITE_FULL || code == SQLITE_READONLY || code == SQLITE_CANTOPEN;
+  return Error{io ? ErrorCode::kIo : ErrorCode::kBadInput, path_ + ": " + what + " (" + sqlite3_errmsg(db_) + ")"};
+}
+
+Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, Mode mode) {
+  using R = Result<std::unique_ptr<ResultStore>>;
+  std::error_code ec;
+  if (mode == Mode::kReadOnly && !std::filesystem::is_regular_file(path, ec))
+    return R::Failure(path + ": no such results store");
+  if (std::filesystem::is_directory(path, ec)) return R::Failure(path + ": is a directory, not a results store");
+  // Read-only opens by URI: mode=ro never creates or writes; on a read-only
+  // file system a WAL store cannot make its shared-memory file, and
+  // immutable=1 then reads it as the file it is.
+  auto open = [&](const std::string& uri, int flags) -> sqlite3* {
+    sqlite3* db = nullptr;
+    if (sqlite3_open_v2(uri.c_str(), &db, flags, nullptr) != SQLITE_OK) {
+      sqlite3_close(db);
+      return nullptr;
+    }
+    return db;
+  };
+  std::string encoded;
+  for (char c : path) {
+    if (c == '%' || c == '?' || c == '#') {
+      char buf[4];
+      std::snprintf(buf, sizeof buf, "%%%02X", static_cast<unsigned char>(c));
+      encoded += buf;
+    } else {
+      encoded += c;
+    }
+  }
   sqlite3* db = nullptr;
-  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) != SQLITE_OK) {
-    std::string error = path + ": cannot open results store: " + (db ? sqlite3_errmsg(db) : "out of memory");
-    sqlite3_close(db);
-    return {nullptr, error};
+  if (mode == Mode::kReadOnly) {
+    const int flags = SQLITE_OPEN_READONLY | SQLITE_OPEN_URI;
+    db = open("file:" + encoded + "?mode=ro", flags);
+    if (db && ExecOn(db, "SELECT count(*) FROM sqlite_master;")) {
+      // readable as it is
+    } else {
+      sqlite3_close(db);
+      db = open("file:" + encoded + "?immutable=1", flags);
+    }
+  } else {
+    db = open(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
   }
-  std::unique_ptr<ResultStore> store(new ResultStore(db));
+  if (!db) return R::Failure(path + ": cannot open the results store", ErrorCode::kIo);
+  std::unique_ptr<ResultStore> store(new ResultStore(db, path));
   sqlite3_busy_timeout(db, 10000);
-  // WAL: a reader (report) never blocks the runner, and a crash mid-write rolls back cleanly.
-  std::string error = store->Exec("PRAGMA journal_mode=WAL;");
-  if (error.empty()) error = store->Exec(kSchema);
-  if (!error.empty()) return {nullptr, path + ": " + error};
-  return {std::move(store), ""};
-}
-
-std::string ResultStore::Exec(const std::string& sql) {
-  char* message = nullptr;
-  if (sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
-    std::string error = message ? message : "sqlite error";
-    sqlite3_free(message);
-    return error;
+  if (mode == Mode::kReadOnly) {
+    const std::set<std::string> columns = ColumnsOf(db, "main");
+    if (!columns.count("id") || !columns.count("job"))
+      return R::Failure(path + ": not a shimmer results store (it has no jobs table)");
+    store->has_device_columns_ = columns.count("device") > 0;
+    return store;
   }
-  return "";
+  // WAL: a reader (report) never blocks the runner, and a crash mid-write rolls back cleanly.
+  if (Status s = store->Exec("PRAGMA journal_mode=WAL;"); !s) return store->Failure("cannot open the results store");
+  if (Status s = store->Exec(kSchema); !s) return store->Failure("not a shimmer results store");
+  // Stores from before the device columns get them; their old rows read NULL.
+  const std::set<std::string> columns = ColumnsOf(db, "main");
+  for (const char* column : {"device", "driver"})
+    if (!columns.count(column))
+      if (Status s = store->Exec(std::string("ALTER TABLE jobs ADD COLUMN ") + column + " TEXT;"); !s)
+        return store->Failure("cannot add the " + std::string(column) + " column");
+  return store;
 }
 
-bool ResultStore::Has(const std::string& id) {
+Status ResultStore::Exec(const std::string& sql) {
+  Status s = ExecOn(db_, sql);
+  if (!s) return Status::Failure(path_ + ": " + s.error(), s.code());
+  return s;
+}
+
+Result<bool> ResultStore::Has(const std::string& id) {
   Statement s;
-  sqlite3_prepare_v2(db_, "SELECT 1 FROM jobs WHERE id = ?", -1, &s.stmt, nullptr);
+  if (sqlite3_prepare_v2(db_, "SELECT 1 FROM jobs WHERE id = ?", -1, &s.stmt, nullptr) != SQLITE_OK)
+    return Failure("cannot read the jobs");
   sqlite3_bind_text(s.stmt, 1, id.c_str(), -1, SQLITE_TRANSIENT);
-  return sqlite3_step(s.stmt) == SQLITE_ROW;
+  const int rc = sqlite3_step(s.stmt);
+  if (rc != SQLITE_ROW && rc != SQLITE_DONE) return Failure("cannot read the jobs");
+  return rc == SQLITE_ROW;
 }
 
-std::string ResultStore::Insert(const JobResult& r) {
-  std::string error = Exec("BEGIN IMMEDIATE;");
-  if (!error.empty()) return error;
+Status ResultStore::Insert(const JobResult& r) {
+  if (Status s = Exec("BEGIN IMMEDIATE;"); !s) return s;
   Statement s;
-  sqlite3_prepare_v2(db_,
-                     "INSERT OR REPLACE INTO jobs (id, reference_id, scene, material, camera, variant, params, "
-                     "derivatives, width, height, frames, fps, reference_spp, reference_tolerance, tv_ratio, tv_err, "
-                     "energy_bias, temporal_diff_err, relmse, flicker_index, metrics, job, gpu_ms_per_frame, wall_s, "
-                     "revision, core_version) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
-                     -1, &s.stmt, nullptr);
+  std::string columns, marks;
+  for (const char* c : kJobColumns) {
+    if (std::string_view(c) == "finished_at") continue;
+    columns += (columns.empty() ? "" : ", ") + std::string(c);
+    marks += marks.empty() ? "?" : ",?";
+  }
+  const std::string sql = "INSERT OR REPLACE INTO jobs (" + columns + ") VALUES (" + marks + ")";
+  if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &s.stmt, nullptr) != SQLITE_OK) {
+    Error e = Failure("cannot write a job");
+    (void)Exec("ROLLBACK;");
+    return e;
+  }
   int i = 1;
   auto text = [&](const std::string& v) { sqlite3_bind_text(s.stmt, i++, v.c_str(), -1, SQLITE_TRANSIENT); };
   auto real = [&](double v) {
@@ -125,70 +226,71 @@ std::string ResultStore::Insert(const JobResult& r) {
   real(r.wall_s);
   text(r.revision);
   text(r.core_version);
+  text(r.device);
+  text(r.driver);
   if (sqlite3_step(s.stmt) != SQLITE_DONE) {
-    error = sqlite3_errmsg(db_);
-    Exec("ROLLBACK;");
-    return error;
+    Error e = Failure("cannot write job " + r.id);
+    (void)Exec("ROLLBACK;");
+    return e;
   }
   return Exec("COMMIT;");
 }
 
-std::vector<JobResult> ResultStore::All() { return Select("", ""); }
+Result<std::vector<JobResult>> ResultStore::All() { return Select("", ""); }
 
-std::optional<JobResult> ResultStore::Get(const std::string& id) {
-  std::vector<JobResult> rows = Select("WHERE id = ?", id);
-  if (rows.empty()) return std::nullopt;
-  return std::move(rows.front());
+Result<std::optional<JobResult>> ResultStore::Get(const std::string& id) {
+  auto rows = Select("WHERE id = ?", id);
+  if (!rows) return rows.failure();
+  if (rows->empty()) return std::optional<JobResult>();
+  return std::optional<JobResult>(std::move(rows->front()));
 }
 
-std::vector<JobResult> ResultStore::Select(const std::string& where, const std::string& id) {
+Result<std::vector<JobResult>> ResultStore::Select(const std::string& where, const std::string& id) {
+  using R = Result<std::vector<JobResult>>;
   std::vector<JobResult> rows;
   Statement s;
+  const std::string device_columns = has_device_columns_ ? "device, driver" : "NULL, NULL";
   const std::string sql =
-      "SELECT id, reference_id, scene, material, camera, variant, params, derivatives, width, height, "
-      "frames, fps, reference_spp, reference_tolerance, metrics, gpu_ms_per_frame, wall_s, revision, "
-      "core_version, job FROM jobs " + where + " ORDER BY id";
-  sqlite3_prepare_v2(db_, sql.c_str(), -1, &s.stmt, nullptr);
+      "SELECT id, reference_id, metrics, gpu_ms_per_frame, wall_s, revision, core_version, job, " + device_columns +
+      " FROM jobs " + where + " ORDER BY id";
+  if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &s.stmt, nullptr) != SQLITE_OK) return Failure("cannot read the jobs");
   if (!id.empty()) sqlite3_bind_text(s.stmt, 1, id.c_str(), -1, SQLITE_TRANSIENT);
   auto str = [&](int c) {
     const unsigned char* t = sqlite3_column_text(s.stmt, c);
     return t ? std::string(reinterpret_cast<const char*>(t)) : std::string();
   };
-  while (sqlite3_step(s.stmt) == SQLITE_ROW) {
+  int rc;
+  while ((rc = sqlite3_step(s.stmt)) == SQLITE_ROW) {
     JobResult r;
     r.id = str(0);
     r.reference_id = str(1);
-    r.job.scene = str(2);
-    r.job.material = str(3);
-    r.job.camera = str(4);
-    r.job.variant = str(5);
-    r.job.params = nlohmann::json::parse(str(6)).get<std::map<std::string, double>>();
-    r.job.derivatives = str(7);
-    r.job.width = sqlite3_column_int(s.stmt, 8);
-    r.job.height = sqlite3_column_int(s.stmt, 9);
-    r.job.frames = sqlite3_column_int(s.stmt, 10);
-    r.job.fps = sqlite3_column_double(s.stmt, 11);
-    r.job.reference.spp = sqlite3_column_int(s.stmt, 12);
-    r.job.reference.tolerance = sqlite3_column_double(s.stmt, 13);
-    r.metrics = nlohmann::json::parse(str(14));
-    r.gpu_ms_per_frame = sqlite3_column_double(s.stmt, 15);
-    r.wall_s = sqlite3_column_double(s.stmt, 16);
-    r.revision = str(17);
-    r.core_version = str(18);
-    r.job = Job::FromJson(nlohmann::json::parse(str(19)));  // the columns above are for SQL users
+    try {
+      r.metrics = nlohmann::json::parse(str(2));
+      // The other columns repeat the job for SQL users; the job JSON is the record.
+      r.job = Job::FromJson(nlohmann::json::parse(str(7)));
+    } catch (const nlohmann::json::exception&) {
+      return R::Failure(path_ + ": job " + r.id + " is damaged (its JSON does not parse)");
+    }
+    r.gpu_ms_per_frame = sqlite3_column_double(s.stmt, 3);
+    r.wall_s = sqlite3_column_double(s.stmt, 4);
+    r.revision = str(5);
+    r.core_version = str(6);
+    r.device = str(8);
+    r.driver = str(9);
     rows.push_back(std::move(r));
   }
+  if (rc != SQLITE_DONE) return Failure("cannot read the jobs");
   return rows;
 }
 
-std::string ResultStore::InsertFit(const std::string& variant, const std::string& param,
-                                   const std::string& material, double value, double j_train, double j_validate,
-                                   const nlohmann::json& result) {
+Status ResultStore::InsertFit(const std::string& variant, const std::string& param, const std::string& material,
+                              double value, double j_train, double j_validate, const nlohmann::json& result) {
   Statement s;
-  sqlite3_prepare_v2(db_,
-                     "INSERT OR REPLACE INTO fits (variant, param, material, value, j_train, j_validate, result) "
-                     "VALUES (?,?,?,?,?,?,?)",
-                     -1, &s.stmt, nullptr);
+  if (sqlite3_prepare_v2(db_,
+                         "INSERT OR REPLACE INTO fits (variant, param, material, value, j_train, j_validate, result) "
+                         "VALUES (?,?,?,?,?,?,?)",
+                         -1, &s.stmt, nullptr) != SQLITE_OK)
+    return Failure("cannot write a fit");
   sqlite3_bind_text(s.stmt, 1, variant.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(s.stmt, 2, param.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(s.stmt, 3, material.c_str(), -1, SQLITE_TRANSIENT);
@@ -198,31 +300,98 @@ std::string ResultStore::InsertFit(const std::string& variant, const std::string
   const std::string text = result.dump();
   sqlite3_bind_text(s.stmt, 7, text.c_str(), -1, SQLITE_TRANSIENT);
   // One statement is its own transaction in SQLite: the row is whole or absent.
-  return sqlite3_step(s.stmt) == SQLITE_DONE ? "" : sqlite3_errmsg(db_);
+  if (sqlite3_step(s.stmt) != SQLITE_DONE) return Failure("cannot write a fit");
+  return Ok();
 }
 
-std::vector<nlohmann::json> ResultStore::Fits() {
+Result<std::vector<nlohmann::json>> ResultStore::Fits() {
   std::vector<nlohmann::json> out;
   Statement s;
-  sqlite3_prepare_v2(db_, "SELECT result FROM fits ORDER BY variant, param, material", -1, &s.stmt, nullptr);
-  while (sqlite3_step(s.stmt) == SQLITE_ROW)
-    out.push_back(nlohmann::json::parse(reinterpret_cast<const char*>(sqlite3_column_text(s.stmt, 0))));
+  // A store written before any fit ran (or by an older shimmer) may have no fits table.
+  if (sqlite3_prepare_v2(db_, "SELECT result FROM fits ORDER BY variant, param, material", -1, &s.stmt, nullptr) !=
+      SQLITE_OK)
+    return out;
+  while (sqlite3_step(s.stmt) == SQLITE_ROW) {
+    auto j = nlohmann::json::parse(reinterpret_cast<const char*>(sqlite3_column_text(s.stmt, 0)), nullptr, false);
+    if (j.is_discarded()) return Result<std::vector<nlohmann::json>>::Failure(path_ + ": a fit row is damaged");
+    out.push_back(std::move(j));
+  }
   return out;
 }
 
-std::string ResultStore::MergeFrom(const std::string& other_path) {
-  if (!std::filesystem::exists(other_path)) return other_path + ": no such results store";
-  std::string escaped;
-  for (char c : other_path) escaped += c == '\'' ? std::string("''") : std::string(1, c);
-  std::string error = Exec("ATTACH DATABASE '" + escaped + "' AS other;");
-  if (!error.empty()) return other_path + ": " + error;
-  error = Exec("BEGIN IMMEDIATE; INSERT OR IGNORE INTO jobs SELECT * FROM other.jobs; COMMIT;");
-  if (!error.empty()) {
-    Exec("ROLLBACK;");
-    error = other_path + ": " + error;
+Result<std::size_t> MergeStores(const std::vector<std::string>& inputs, const std::string& output) {
+  using R = Result<std::size_t>;
+  // Stage every input's rows in memory first: nothing touches `output` until
+  // all of them have been read.
+  sqlite3* raw = nullptr;
+  if (sqlite3_open_v2(":memory:", &raw, SQLITE_OPEN_READWRITE | SQLITE_OPEN_URI, nullptr) != SQLITE_OK) {
+    sqlite3_close(raw);
+    return R::Failure("cannot open an in-memory database", ErrorCode::kOutOfMemory);
   }
-  Exec("DETACH DATABASE other;");
-  return error;
+  std::unique_ptr<sqlite3, int (*)(sqlite3*)> db(raw, sqlite3_close);
+  if (Status s = ExecOn(db.get(), kSchema); !s) return s.failure();
+  std::error_code ec;
+  for (const std::string& in : inputs) {
+    if (!std::filesystem::is_regular_file(in, ec)) return R::Failure(in + ": no such results store");
+    if (std::filesystem::equivalent(in, output, ec)) return R::Failure(in + ": is the output store itself");
+    if (Status s = ExecOn(db.get(), "ATTACH DATABASE " + SqlQuote("file:" + in + "?mode=ro") + " AS other;"); !s)
+      return R::Failure(in + ": cannot open the results store (" + s.error() + ")");
+    const std::set<std::string> columns = ColumnsOf(db.get(), "other");
+    std::string select;
+    for (const char* c : kJobColumns) select += (select.empty() ? "" : ", ") + (columns.count(c) ? std::string(c) : "NULL");
+    Status copied = columns.count("id") && columns.count("job")
+                        ? ExecOn(db.get(), "INSERT OR IGNORE INTO main.jobs SELECT " + select + " FROM other.jobs;")
+                        : Status::Failure("not a shimmer results store (it has no jobs table)");
+    (void)ExecOn(db.get(), "DETACH DATABASE other;");
+    if (!copied) return R::Failure(in + ": " + copied.error());
+  }
+  const bool existed = std::filesystem::exists(output, ec);
+  {
+    // Creates the schema (and WAL) of a new output, or brings an old one up to date.
+    auto store = ResultStore::Open(output);
+    if (!store) return store.failure();
+  }
+  auto fail = [&](const std::string& why) -> R {
+    if (!existed) {
+      for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(output + suffix, ec);
+    }
+    return R::Failure(output + ": " + why, ErrorCode::kIo);
+  };
+  if (Status s = ExecOn(db.get(), "ATTACH DATABASE " + SqlQuote(output) + " AS out;"); !s) return fail(s.error());
+  std::string columns;
+  for (const char* c : kJobColumns) columns += (columns.empty() ? "" : ", ") + std::string(c);
+  Status merged = ExecOn(db.get(), "BEGIN IMMEDIATE; INSERT OR IGNORE INTO out.jobs (" + columns + ") SELECT " +
+                                       columns + " FROM main.jobs; COMMIT;");
+  if (!merged) {
+    (void)ExecOn(db.get(), "ROLLBACK;");
+    (void)ExecOn(db.get(), "DETACH DATABASE out;");
+    return fail(merged.error());
+  }
+  Statement count;
+  std::size_t rows = 0;
+  if (sqlite3_prepare_v2(db.get(), "SELECT count(*) FROM out.jobs", -1, &count.stmt, nullptr) == SQLITE_OK &&
+      sqlite3_step(count.stmt) == SQLITE_ROW)
+    rows = std::size_t(sqlite3_column_int64(count.stmt, 0));
+  return rows;
 }
+
+Result<std::unique_ptr<StoreLock>> StoreLock::Acquire(const std::string& store_path) {
+  using R = Result<std::unique_ptr<StoreLock>>;
+  const std::string lock_path = store_path + ".lock";
+  errno = 0;
+  const int fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) return R::Failure(lock_path + ": cannot create the store's lock file (" + SystemReason(errno) + ")", ErrorCode::kIo);
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int e = errno;
+    ::close(fd);
+    if (e == EWOULDBLOCK)
+      return R::Failure(store_path + ": another shimmer process is running jobs into this store; wait for it to finish "
+                        "(one runner per store, lock " + lock_path + ")");
+    return R::Failure(lock_path + ": cannot lock (" + SystemReason(e) + ")", ErrorCode::kIo);
+  }
+  return std::unique_ptr<StoreLock>(new StoreLock(fd));
+}
+
+StoreLock::~StoreLock() { ::close(fd_); }
 
 }  // namespace shimmer::experiments

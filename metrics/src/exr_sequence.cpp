@@ -1,29 +1,22 @@
 #include "shimmer/metrics/exr_sequence.h"
 
-#include <ImfChannelList.h>
-#include <ImfFrameBuffer.h>
-#include <ImfHeader.h>
-#include <ImfOutputFile.h>
-#include <Imath/half.h>
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <optional>
 #include <set>
 
-#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <tbb/parallel_for.h>
 
-#include "exr_input.h"
-#include "shimmer/metrics/atomic_file.h"
+#include "shimmer/core/exr_input.h"
+#include "shimmer/core/sequence_file.h"
+#include "shimmer/core/atomic_file.h"
 
 namespace shimmer::metrics {
 
 namespace fs = std::filesystem;
-using detail::ExrInput;
 
 namespace {
 
@@ -49,7 +42,7 @@ LayerMap MapLayers(const ExrInput& file) {
     const std::string& name = parts[p].name;
     std::string part_layer = kBeautyLayer;
     if (parts.size() > 1 && !IsBeautyPartName(name)) part_layer = name;
-    for (const detail::ExrChannelInfo& channel : parts[p].channels) {
+    for (const ExrChannelInfo& channel : parts[p].channels) {
       const std::string& full = channel.name;
       auto dot = full.rfind('.');
       std::string layer = dot == std::string::npos ? part_layer : full.substr(0, dot);
@@ -86,7 +79,7 @@ std::string Join(const std::vector<std::string>& items) {
 struct FrameSize {
   int width = 0, height = 0;
 };
-FrameSize SizeOf(const detail::ExrPartInfo& part) { return {part.width, part.height}; }
+FrameSize SizeOf(const ExrPartInfo& part) { return {part.width, part.height}; }
 
 Result<std::vector<fs::path>> ListExrFiles(const fs::path& dir) {
   std::error_code ec;
@@ -107,7 +100,7 @@ Result<std::vector<fs::path>> ListExrFiles(const fs::path& dir) {
 Result<LayerMap> ReadLayerMap(const fs::path& file, FrameSize* size) {
   auto in = ExrInput::Open(file);
   if (!in) return Result<LayerMap>::Failure(in.error());
-  for (const detail::ExrPartInfo& part : in->parts())
+  for (const ExrPartInfo& part : in->parts())
     if (part.deep) return Result<LayerMap>::Failure(file.string() + ": deep EXR images are not supported");
   if (size) *size = SizeOf(in->parts().front());
   return MapLayers(*in);
@@ -138,9 +131,9 @@ FrameCheck CheckFrame(const fs::path& frame, const ExrSequence& seq) {
 }
 
 // One layer's luminance (and motion) from an open file.
-Result<Frame> ReadLayer(const ExrInput& in, const fs::path& file, const std::string& layer, int width, int height,
+Result<LuminanceFrame> ReadLayer(const ExrInput& in, const fs::path& file, const std::string& layer, int width, int height,
                         bool with_motion) {
-  using R = Result<Frame>;
+  using R = Result<LuminanceFrame>;
   LayerMap layers = MapLayers(in);
   auto it = layers.find(layer);
   if (it == layers.end() || !HasLuminance(it->second))
@@ -169,23 +162,23 @@ Result<Frame> ReadLayer(const ExrInput& in, const fs::path& file, const std::str
   std::set<int> parts;
   for (const auto& w : wanted) parts.insert(w.first.part);
   for (int p : parts) {
-    const detail::ExrPartInfo& part = in.parts()[p];
+    const ExrPartInfo& part = in.parts()[p];
     if (part.deep) return R::Failure(file.string() + ": deep EXR images are not supported");
     if (part.width != width || part.height != height)
       return R::Failure(file.string() + ": frame is " + std::to_string(part.width) + "x" +
                         std::to_string(part.height) + ", expected " + std::to_string(width) + "x" +
                         std::to_string(height));
-    std::vector<detail::ExrPlaneRequest> requests;
+    std::vector<ExrPlaneRequest> requests;
     for (const auto& [ref, plane] : wanted) {
       if (ref.part != p) continue;
-      for (const detail::ExrChannelInfo& c : part.channels)
+      for (const ExrChannelInfo& c : part.channels)
         if (c.name == ref.name && (c.x_sampling != 1 || c.y_sampling != 1))
           return R::Failure(file.string() + ": channel " + ref.name + " is subsampled; not supported");
       requests.push_back({ref.name, plane->ptr<float>()});
     }
     if (Status read = in.Read(p, requests); !read) return R::Failure(read.error());
   }
-  Frame frame;
+  LuminanceFrame frame;
   if (rgb) {
     frame.luminance.create(height, width, CV_32F);
     for (int y = 0; y < height; ++y) {
@@ -201,13 +194,16 @@ Result<Frame> ReadLayer(const ExrInput& in, const fs::path& file, const std::str
   return frame;
 }
 
-}  // namespace
-
-Result<std::vector<std::string>> ListLayers(const fs::path& file) {
-  auto layers = ReadLayerMap(file, nullptr);
-  if (!layers) return Result<std::vector<std::string>>::Failure(layers.error());
-  return LuminanceLayers(*layers);
+// A renderer that stopped (or is still going) says so in its sequence.json;
+// its frames are not a sequence to measure.
+Status CheckComplete(const SequenceFile& sequence, const fs::path& file) {
+  if (sequence.status == SequenceStatus::kComplete) return Ok();
+  std::string why = file.string() + ": the sequence is " + SequenceStatusName(sequence.status) + ", not complete";
+  if (!sequence.error.empty()) why += " (" + sequence.error + ")";
+  return Status::Failure(why);
 }
+
+}  // namespace
 
 Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& request) {
   using R = Result<ExrSequence>;
@@ -217,47 +213,26 @@ Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& re
   std::optional<double> json_fps;
   if (fs::is_directory(path, ec)) {
     auto files = ListExrFiles(path);
-    if (!files) return R::Failure(files.error());
+    if (!files) return files.failure();
     seq.frames = std::move(*files);
     if (seq.frames.empty()) return R::Failure(path.string() + ": no .exr frames in this directory");
-    fs::path sidecar = path / "sequence.json";
-    if (fs::is_regular_file(sidecar, ec)) {
-      // The renderer writes sequence.json beside its frames; honour its fps.
-      try {
-        std::ifstream in(sidecar);
-        nlohmann::json j = nlohmann::json::parse(in);
-        if (j.contains("fps") && j["fps"].is_number()) json_fps = j["fps"].get<double>();
-      } catch (const std::exception& e) {
-        return R::Failure(sidecar.string() + ": not valid JSON (" + e.what() + ")");
-      }
+    // The renderer writes sequence.json beside its frames; honour its fps.
+    if (fs::path sidecar = path / "sequence.json"; fs::is_regular_file(sidecar, ec)) {
+      auto sequence = ReadSequenceFile(sidecar);
+      if (!sequence) return sequence.failure();
+      if (Status s = CheckComplete(*sequence, sidecar); !s) return s.failure();
+      json_fps = sequence->fps;
     }
   } else if (fs::is_regular_file(path, ec) && path.extension() == ".json") {
-    nlohmann::json j;
-    try {
-      std::ifstream in(path);
-      j = nlohmann::json::parse(in);
-    } catch (const std::exception& e) {
-      return R::Failure(path.string() + ": not valid JSON (" + e.what() + ")");
-    }
-    if (!j.is_object()) return R::Failure(path.string() + ": expected a JSON object");
-    if (j.contains("fps")) {
-      if (!j["fps"].is_number()) return R::Failure(path.string() + ": \"fps\" must be a number");
-      json_fps = j["fps"].get<double>();
-    }
+    auto sequence = ReadSequenceFile(path);
+    if (!sequence) return sequence.failure();
+    if (Status s = CheckComplete(*sequence, path); !s) return s.failure();
+    json_fps = sequence->fps;
     fs::path dir = path.parent_path().empty() ? fs::path(".") : path.parent_path();
-    if (j.contains("frames")) {
-      // File names, or objects with a "file" (shimmer's renderer adds gpu_ms and time_s).
-      const std::string shape = ": \"frames\" must be an array of file names or of {\"file\": name} objects";
-      if (!j["frames"].is_array()) return R::Failure(path.string() + shape);
-      for (const auto& f : j["frames"]) {
-        const nlohmann::json* name = &f;
-        if (f.is_object() && f.contains("file")) name = &f["file"];
-        if (!name->is_string()) return R::Failure(path.string() + shape);
-        seq.frames.push_back(dir / name->get<std::string>());
-      }
-    } else {
+    for (const SequenceFrame& f : sequence->frames) seq.frames.push_back(dir / f.file);
+    if (sequence->frames.empty()) {
       auto files = ListExrFiles(dir);
-      if (!files) return R::Failure(files.error());
+      if (!files) return files.failure();
       seq.frames = std::move(*files);
     }
     if (seq.frames.empty()) return R::Failure(path.string() + ": lists no frames and its directory has no .exr files");
@@ -315,9 +290,9 @@ Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& re
   return seq;
 }
 
-Result<Frame> ReadFrame(const fs::path& file, const std::string& layer, int width, int height, bool with_motion) {
+Result<LuminanceFrame> ReadFrame(const fs::path& file, const std::string& layer, int width, int height, bool with_motion) {
   auto in = ExrInput::Open(file, /*whole_file=*/true);
-  if (!in) return Result<Frame>::Failure(in.error());
+  if (!in) return Result<LuminanceFrame>::Failure(in.error());
   return ReadLayer(*in, file, layer, width, height, with_motion);
 }
 
@@ -362,43 +337,9 @@ Result<cv::Mat> ReadMask(const fs::path& file, int width, int height) {
   return cv::Mat(inside / 255);
 }
 
-Status WriteExr(const fs::path& file, const std::vector<ExrChannel>& channels, ExrCompression compression) {
-  if (channels.empty()) return Status::Failure(file.string() + ": no channels to write");
-  const int width = channels[0].plane.cols, height = channels[0].plane.rows;
-  fs::path temporary = TemporaryPathFor(file);
-  try {
-    Imf::Header header(width, height);
-    header.compression() = compression == ExrCompression::kZip ? Imf::ZIP_COMPRESSION : Imf::NO_COMPRESSION;
-    Imf::FrameBuffer fb;
-    std::vector<std::vector<Imath::half>> halves;
-    halves.reserve(channels.size());
-    for (const ExrChannel& c : channels) {
-      if (c.plane.type() != CV_32F || c.plane.cols != width || c.plane.rows != height || !c.plane.isContinuous())
-        return Status::Failure(file.string() + ": channel " + c.name + " must be a continuous CV_32F " +
-                               std::to_string(width) + "x" + std::to_string(height) + " plane");
-      header.channels().insert(c.name, Imf::Channel(c.half ? Imf::HALF : Imf::FLOAT));
-      if (c.half) {
-        auto& h = halves.emplace_back(static_cast<size_t>(width) * height);
-        const float* src = c.plane.ptr<float>();
-        for (size_t i = 0; i < h.size(); ++i) h[i] = Imath::half(src[i]);
-        fb.insert(c.name, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(h.data()), sizeof(Imath::half),
-                                     width * sizeof(Imath::half)));
-      } else {
-        fb.insert(c.name, Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(c.plane.ptr<float>())),
-                                     sizeof(float), width * sizeof(float)));
-      }
-    }
-    {
-      Imf::OutputFile out(temporary.c_str(), header);
-      out.setFrameBuffer(fb);
-      out.writePixels(height);
-    }
-  } catch (const std::exception& e) {
-    std::error_code ec;
-    fs::remove(temporary, ec);
-    return Status::Failure(file.string() + ": cannot write EXR (" + e.what() + ")");
-  }
-  return CommitFile(temporary, file);
+ExrPlane PlaneOf(std::string name, const cv::Mat& plane, bool half) {
+  CV_Assert(plane.type() == CV_32F && plane.isContinuous());
+  return ExrPlane{std::move(name), plane.ptr<float>(), half};
 }
 
 }  // namespace shimmer::metrics

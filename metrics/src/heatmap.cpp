@@ -8,7 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "shimmer/metrics/atomic_file.h"
+#include "shimmer/core/atomic_file.h"
 
 namespace shimmer::metrics {
 

@@ -22,7 +22,7 @@ constexpr double kRelMseEpsilon = 0.01;
 constexpr int kDefaultSegmentLength = 64;
 
 struct FramePair {
-  Frame test, reference;
+  LuminanceFrame test, reference;
 };
 
 std::string SizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }

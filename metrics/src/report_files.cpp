@@ -5,7 +5,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "shimmer/metrics/atomic_file.h"
+#include "shimmer/core/atomic_file.h"
+#include "shimmer/core/gnuplot.h"
 #include "shimmer/metrics/exr_sequence.h"
 #include "shimmer/metrics/heatmap.h"
 #include "shimmer/metrics/temporal_sensitivity.h"
@@ -16,43 +17,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-Status WriteText(const fs::path& file, const std::string& text) {
-  const fs::path temporary = TemporaryPathFor(file);
-  {
-    std::ofstream out(temporary, std::ios::binary);
-    out << text;
-    if (!out.good()) {
-      std::error_code ec;
-      fs::remove(temporary, ec);
-      return Status::Failure(file.string() + ": cannot write");
-    }
-  }
-  return CommitFile(temporary, file);
-}
-
 Status WriteMap(const fs::path& dir, const std::string& name, const cv::Mat& map, const cv::Mat& region,
                 HeatmapScaling scaling, const std::string& title) {
-  if (Status s = WriteExr(dir / (name + ".exr"), {{"Y", map, false}}); !s) return s;
+  if (Status s = WriteExr(dir / (name + ".exr"), map.cols, map.rows, {PlaneOf("Y", map)}); !s) return s;
   const HeatmapRange range = AutoRange(map, region, scaling);
   return WriteImage(dir / (name + ".png"), RenderHeatmap(map, region, scaling, range, title));
-}
-
-bool OnPath(const std::string& program) {
-  const char* path = std::getenv("PATH");
-  if (!path) return false;
-  std::stringstream dirs(path);
-  std::string d;
-  while (std::getline(dirs, d, ':')) {
-    std::error_code ec;
-    if (!d.empty() && fs::is_regular_file(fs::path(d) / program, ec)) return true;
-  }
-  return false;
-}
-
-std::string ShellQuote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
 }
 
 }  // namespace
@@ -64,14 +33,14 @@ Status WriteSpectrumPlot(const MetricsReport& report, const fs::path& dir, std::
   csv << "freq_hz,psd,watson_gain\n";
   for (size_t k = 0; k < f.psd.size(); ++k)
     csv << f.freq_hz[k] << "," << f.psd[k] << "," << WatsonTemporalGain(f.freq_hz[k]) << "\n";
-  if (Status s = WriteText(dir / "spectrum.csv", csv.str()); !s) return s;
+  if (Status s = WriteFileAtomic(dir / "spectrum.csv", csv.str()); !s) return s;
 
   // The script sits beside the data so the plot can be restyled and rerun by hand.
-  const std::string partial = TemporaryPathFor(dir / "spectrum.png").filename().string();
+  auto script = [&](const std::string& output) {
   std::ostringstream gp;
   gp << "# Flicker spectrum written by `shimmer metrics`; run: gnuplot spectrum.gp\n"
-     << "set terminal pngcairo size 800,480 font 'sans,10'\n"
-     << "set output '" << partial << "'\n"
+     << "set terminal pngcairo size 800,480 font 'sans,10' noenhanced\n"
+     << "set output '" << output << "'\n"
      << "set datafile separator ','\n"
      << "set title 'Flicker spectrum: Welch PSD of " << (f.signal == "error" ? "E = T - R" : "T")
      << " (layer " << report.layer << ", " << report.pixels - report.nan_pixels << " px, L = " << f.segment_length
@@ -91,28 +60,21 @@ Status WriteSpectrumPlot(const MetricsReport& report, const fs::path& dir, std::
      << "plot 'spectrum.csv' skip 1 using 1:($2 > 0 ? $2 : NaN) with linespoints lw 2 pt 7 ps 0.6 lc rgb '#c0392b' "
         "title 'PSD', \\\n"
      << "     '' skip 1 using 1:($3*$3) axes x1y2 with lines dt 3 lw 1.5 lc rgb '#2c3e50' title 'eye weight "
-        "(flicker\\_index)'\n";
-  if (Status s = WriteText(dir / "spectrum.gp", gp.str()); !s) return s;
-
-  if (!OnPath("gnuplot")) {
-    if (warnings) warnings->push_back("gnuplot not found: wrote spectrum.csv and spectrum.gp but no spectrum.png");
-    return Ok();
-  }
-  const std::string command = "cd " + ShellQuote(dir.string()) + " && gnuplot spectrum.gp >/dev/null 2>&1";
-  const int rc = std::system(command.c_str());
-  std::error_code ec;
-  if (rc != 0 || !fs::exists(dir / partial, ec)) {
-    fs::remove(dir / partial, ec);
-    if (warnings) warnings->push_back("gnuplot failed on " + (dir / "spectrum.gp").string() + "; no spectrum.png");
-    return Ok();
-  }
-  return CommitFile(dir / partial, dir / "spectrum.png");
+        "(flicker_index)'\n";
+    return gp.str();
+  };
+  auto plotted = WritePlot(dir, "spectrum.gp", "spectrum.png", script);
+  if (!plotted) return plotted.failure();
+  if (*plotted && warnings) warnings->push_back(**plotted);
+  return Ok();
 }
 
 Status WriteReportFiles(const MetricsReport& report, const fs::path& dir, std::vector<std::string>* warnings) {
   std::error_code ec;
   fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir)) return Status::Failure(dir.string() + ": cannot create directory");
+  if (ec || !fs::is_directory(dir))
+    return Status::Failure(dir.string() + ": cannot create the directory" + (ec ? " (" + ec.message() + ")" : ""),
+                           ErrorCode::kIo);
   const cv::Mat& region = report.region_mask;
   if (Status s = WriteMap(dir, "tv_test", report.tv_test_map, region, HeatmapScaling::kLog,
                           "temporal variance of T (Y^2)");
@@ -133,7 +95,7 @@ Status WriteReportFiles(const MetricsReport& report, const fs::path& dir, std::v
       return s;
   }
   if (Status s = WriteSpectrumPlot(report, dir, warnings); !s) return s;
-  return WriteText(dir / "metrics.json", ToJson(report).dump(2) + "\n");
+  return WriteFileAtomic(dir / "metrics.json", ToJson(report).dump(2) + "\n");
 }
 
 }  // namespace shimmer::metrics

@@ -1,4 +1,4 @@
-#include "scene.h"
+#include "shimmer/renderer/scene.h"
 
 #include <nlohmann/json.hpp>
 
@@ -6,7 +6,10 @@
 #include <cmath>
 #include <fstream>
 #include <numeric>
+#include <filesystem>
 #include <sstream>
+
+#include "shimmer/core/json_file.h"
 
 namespace shimmer::scene {
 
@@ -101,34 +104,79 @@ Scene BumpyPlaneScene() {
   return s;
 }
 
-template <class T>
-Parsed<T> Fail(std::string message) {
-  Parsed<T> p;
-  p.error = std::move(message);
-  return p;
-}
+// Reads the optional fields of one JSON object; the first problem is kept,
+// worded with the object's place in the file ("scene.json: primitives[2]:
+// 'radius' must be a number > 0").
+class FieldReader {
+ public:
+  FieldReader(const nlohmann::json& object, std::string where) : j_(object), where_(std::move(where)) {}
 
-bool ReadVec3(const nlohmann::json& j, const char* key, glm::dvec3* out, std::string* error, const std::string& where) {
-  if (!j.contains(key)) return true;
-  const auto& v = j[key];
-  if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number()) {
-    *error = where + ": '" + key + "' must be an array of 3 numbers";
-    return false;
+  // `allowed`: every key the object may have; another is reported (a typo
+  // would otherwise be ignored silently).
+  FieldReader& Keys(std::initializer_list<const char*> allowed) {
+    for (const auto& [key, value] : j_.items()) {
+      bool known = false;
+      for (const char* a : allowed) known = known || key == a;
+      if (!known) {
+        std::string list;
+        for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+        Fail("unknown key '" + key + "' (expected: " + list + ")");
+        break;
+      }
+    }
+    return *this;
   }
-  *out = {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
-  return true;
-}
+  FieldReader& Require(const char* key) {
+    if (!j_.contains(key)) Fail("'" + std::string(key) + "' is required");
+    return *this;
+  }
+  FieldReader& Vec3(const char* key, glm::dvec3* out) {
+    if (!ok() || !j_.contains(key)) return *this;
+    const auto& v = j_[key];
+    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
+      return Fail("'" + std::string(key) + "' must be an array of 3 numbers");
+    const glm::dvec3 x{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+    if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z) || glm::length(x) > kMaxCoordinate)
+      return Fail("'" + std::string(key) + "' must be finite, at most 1e6 from the origin");
+    *out = x;
+    return *this;
+  }
+  // A number in [lo, hi] (or (lo, hi] when `open_lo`).
+  FieldReader& Number(const char* key, double* out, double lo, double hi, bool open_lo = false) {
+    if (!ok() || !j_.contains(key)) return *this;
+    const auto& v = j_[key];
+    const double x = v.is_number() ? v.get<double>() : std::nan("");
+    if (!v.is_number() || !std::isfinite(x) || x < lo || x > hi || (open_lo && x == lo)) {
+      std::string range = open_lo && lo == 0 ? "> 0" : (open_lo ? "in (" : "in [") + Short(lo) + ", " + Short(hi) + "]";
+      if (open_lo && lo == 0) range += " and <= " + Short(hi);
+      return Fail("'" + std::string(key) + "' must be a number " + range);
+    }
+    *out = x;
+    return *this;
+  }
+  FieldReader& String(const char* key, std::string* out) {
+    if (!ok() || !j_.contains(key)) return *this;
+    if (!j_[key].is_string()) return Fail("'" + std::string(key) + "' must be a string");
+    *out = j_[key].get<std::string>();
+    return *this;
+  }
+  FieldReader& Fail(const std::string& problem) {
+    if (error_.empty()) error_ = where_ + ": " + problem;
+    return *this;
+  }
+  bool ok() const { return error_.empty(); }
+  const std::string& error() const { return error_; }
 
-bool ReadNumber(const nlohmann::json& j, const char* key, double* out, std::string* error, const std::string& where,
-                double min_value) {
-  if (!j.contains(key)) return true;
-  if (!j[key].is_number() || !std::isfinite(j[key].get<double>()) || j[key].get<double>() < min_value) {
-    *error = where + ": '" + key + "' must be a finite number >= " + std::to_string(min_value);
-    return false;
+ private:
+  static std::string Short(double x) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", x);
+    return buf;
   }
-  *out = j[key].get<double>();
-  return true;
-}
+  const nlohmann::json& j_;
+  std::string where_;
+  std::string error_;
+};
 
 bool ParseRgb(std::string_view text, glm::dvec3* out) {
   std::vector<double> v;
@@ -215,127 +263,134 @@ glm::vec4 PrimWord0(const Primitive& p) {
 
 std::vector<std::string_view> BuiltinSceneNames() { return {"sphere", "sphere-field", "wires", "bumpy-plane"}; }
 
-Parsed<Scene> LoadScene(const std::string& name) {
-  Parsed<Scene> p;
-  if (name == "sphere") p.value = SphereScene();
-  else if (name == "sphere-field") p.value = SphereFieldScene();
-  else if (name == "wires") p.value = WiresScene();
-  else if (name == "bumpy-plane") p.value = BumpyPlaneScene();
-  else {
-    std::ifstream in(name);
-    if (!in) {
-      std::string list;
-      for (auto n : BuiltinSceneNames()) list += (list.empty() ? "" : ", ") + std::string(n);
-      return Fail<Scene>("unknown scene '" + name + "': not a built-in scene (" + list + ") nor a readable JSON file");
-    }
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ParseSceneJson(ss.str(), name);
+Result<Scene> LoadScene(const std::string& name) {
+  if (name == "sphere") return SphereScene();
+  if (name == "sphere-field") return SphereFieldScene();
+  if (name == "wires") return WiresScene();
+  if (name == "bumpy-plane") return BumpyPlaneScene();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(name, ec)) {
+    std::string list;
+    for (auto n : BuiltinSceneNames()) list += (list.empty() ? "" : ", ") + std::string(n);
+    return Result<Scene>::Failure("unknown scene '" + name + "': not a built-in scene (" + list +
+                                  ") nor a JSON scene file");
   }
-  return p;
+  auto json = ReadJsonFile(name);
+  if (!json) return json.failure();
+  return SceneFromJson(*json, name);
 }
 
-Parsed<Scene> ParseSceneJson(std::string_view text, const std::string& source) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    return Fail<Scene>(source + ": not valid JSON: " + e.what());
-  }
-  if (!j.is_object()) return Fail<Scene>(source + ": a scene is a JSON object");
+Result<Scene> ParseSceneJson(std::string_view text, const std::string& source) {
+  auto json = ParseJson(text, source);
+  if (!json) return json.failure();
+  return SceneFromJson(*json, source);
+}
+
+Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) {
+  using R = Result<Scene>;
+  if (!j.is_object()) return R::Failure(source + ": a scene is a JSON object");
   Scene s;
-  s.name = j.value("name", source);
-  std::string error;
-  if (!j.contains("primitives") || !j["primitives"].is_array() || j["primitives"].empty())
-    return Fail<Scene>(source + ": 'primitives' must be a non-empty array");
+  s.name = source;
+  FieldReader top(j, source);
+  top.Keys({"name", "primitives", "light", "material", "camera"}).String("name", &s.name).Require("primitives");
+  if (!top.ok()) return R::Failure(top.error());
+  const auto& prims = j["primitives"];
+  if (!prims.is_array() || prims.empty()) return R::Failure(source + ": 'primitives' must be a non-empty array");
+  if (prims.size() > kMaxPrimitives)
+    return R::Failure(source + ": " + std::to_string(prims.size()) + " primitives; at most " +
+                      std::to_string(kMaxPrimitives) + " are supported");
   int index = 0;
-  for (const auto& pj : j["primitives"]) {
-    std::string where = source + ": primitives[" + std::to_string(index++) + "]";
+  for (const auto& pj : prims) {
+    const std::string where = source + ": primitives[" + std::to_string(index++) + "]";
     if (!pj.is_object() || !pj.contains("type") || !pj["type"].is_string())
-      return Fail<Scene>(where + ": needs a 'type' (sphere, capsule, plane)");
-    std::string type = pj["type"];
+      return R::Failure(where + ": needs a 'type' (sphere, capsule, plane)");
+    const std::string type = pj["type"];
     Primitive p;
+    FieldReader r(pj, where);
     if (type == "sphere") {
       p.type = Primitive::Type::kSphere;
-      if (!ReadVec3(pj, "center", &p.a, &error, where) || !ReadNumber(pj, "radius", &p.radius, &error, where, 1e-9))
-        return Fail<Scene>(error);
+      r.Keys({"type", "center", "radius"}).Require("center");
+      r.Vec3("center", &p.a).Number("radius", &p.radius, 0, kMaxCoordinate, true);
     } else if (type == "capsule") {
       p.type = Primitive::Type::kCapsule;
       p.radius = 0.02;
-      if (!pj.contains("a") || !pj.contains("b")) return Fail<Scene>(where + ": a capsule needs ends 'a' and 'b'");
-      if (!ReadVec3(pj, "a", &p.a, &error, where) || !ReadVec3(pj, "b", &p.b, &error, where) ||
-          !ReadNumber(pj, "radius", &p.radius, &error, where, 1e-9))
-        return Fail<Scene>(error);
-      if (glm::length(p.b - p.a) < 1e-9) return Fail<Scene>(where + ": capsule ends 'a' and 'b' coincide");
+      r.Keys({"type", "a", "b", "radius"}).Require("a").Require("b");
+      r.Vec3("a", &p.a).Vec3("b", &p.b).Number("radius", &p.radius, 0, kMaxCoordinate, true);
+      if (r.ok() && glm::length(p.b - p.a) < 1e-9) r.Fail("capsule ends 'a' and 'b' coincide");
     } else if (type == "plane") {
       p.type = Primitive::Type::kPlane;
       p.radius = 0;
-      if (!ReadNumber(pj, "height", &p.radius, &error, where, -1e30) ||
-          !ReadNumber(pj, "bump_slope", &p.bump_slope, &error, where, 0) ||
-          !ReadNumber(pj, "bump_frequency", &p.bump_frequency, &error, where, 0))
-        return Fail<Scene>(error);
-      if (p.bump_slope > 0 && p.bump_frequency <= 0)
-        return Fail<Scene>(where + ": 'bump_slope' needs a positive 'bump_frequency'");
+      r.Keys({"type", "height", "bump_slope", "bump_frequency"});
+      r.Number("height", &p.radius, -kMaxCoordinate, kMaxCoordinate)
+          .Number("bump_slope", &p.bump_slope, 0, 10)
+          .Number("bump_frequency", &p.bump_frequency, 0, 1e4);
+      if (r.ok() && p.bump_slope > 0 && p.bump_frequency <= 0)
+        r.Fail("'bump_slope' needs a positive 'bump_frequency'");
     } else {
-      return Fail<Scene>(where + ": unknown type '" + type + "' (sphere, capsule, plane)");
+      return R::Failure(where + ": unknown type '" + type + "' (sphere, capsule, plane)");
     }
+    if (!r.ok()) return R::Failure(r.error());
     s.primitives.push_back(p);
   }
   if (j.contains("light")) {
     const auto& lj = j["light"];
-    std::string where = source + ": light";
-    std::string type = lj.is_object() ? lj.value("type", "directional") : "";
-    if (type == "directional") {
+    const std::string where = source + ": light";
+    if (!lj.is_object()) return R::Failure(where + ": must be an object");
+    std::string type = "directional";
+    FieldReader r(lj, where);
+    r.String("type", &type);
+    if (r.ok() && type == "directional") {
       glm::dvec3 dir{0, 1, 0}, rad{1, 1, 1};
-      if (!ReadVec3(lj, "direction", &dir, &error, where) || !ReadVec3(lj, "irradiance", &rad, &error, where))
-        return Fail<Scene>(error);
-      if (glm::length(dir) < 1e-9) return Fail<Scene>(where + ": 'direction' must not be zero");
+      r.Keys({"type", "direction", "irradiance"}).Vec3("direction", &dir).Vec3("irradiance", &rad);
+      if (r.ok() && glm::length(dir) < 1e-9) r.Fail("'direction' must not be zero");
+      if (r.ok() && glm::any(glm::lessThan(rad, glm::dvec3(0)))) r.Fail("'irradiance' must be >= 0");
       s.light.type = shading::LightType::kDirectional;
-      s.light.vec = glm::normalize(dir);
+      if (r.ok()) s.light.vec = glm::normalize(dir);
       s.light.radiance = rad;
-    } else if (type == "sphere") {
+    } else if (r.ok() && type == "sphere") {
       s.light.type = shading::LightType::kSphere;
       s.light.radius = 0.05;
-      if (!ReadVec3(lj, "center", &s.light.vec, &error, where) ||
-          !ReadVec3(lj, "intensity", &s.light.radiance, &error, where) ||
-          !ReadNumber(lj, "radius", &s.light.radius, &error, where, 1e-6))
-        return Fail<Scene>(error);
-    } else {
-      return Fail<Scene>(where + ": 'type' must be directional or sphere");
+      r.Keys({"type", "center", "intensity", "radius"})
+          .Vec3("center", &s.light.vec)
+          .Vec3("intensity", &s.light.radiance)
+          .Number("radius", &s.light.radius, 1e-6, kMaxCoordinate);
+      if (r.ok() && glm::any(glm::lessThan(s.light.radiance, glm::dvec3(0)))) r.Fail("'intensity' must be >= 0");
+    } else if (r.ok()) {
+      r.Fail("'type' must be directional or sphere");
     }
+    if (!r.ok()) return R::Failure(r.error());
   }
   if (j.contains("material")) {
-    if (!j["material"].is_string()) return Fail<Scene>(source + ": 'material' must be a spec string like \"ggx:0.05\"");
+    if (!j["material"].is_string()) return R::Failure(source + ": 'material' must be a spec string like \"ggx:0.05\"");
     auto m = ParseMaterial(j["material"].get<std::string>(), s.material);
-    if (!m.ok()) return Fail<Scene>(source + ": material: " + m.error);
-    s.material = m.value;
+    if (!m) return R::Failure(source + ": " + m.error());
+    s.material = *m;
   }
   if (j.contains("camera")) {
     const auto& cj = j["camera"];
-    std::string where = source + ": camera";
-    if (!ReadVec3(cj, "target", &s.rig.target, &error, where) ||
-        !ReadNumber(cj, "distance", &s.rig.distance, &error, where, 1e-6) ||
-        !ReadNumber(cj, "elevation_deg", &s.rig.elevation_deg, &error, where, -89) ||
-        !ReadNumber(cj, "azimuth_deg", &s.rig.azimuth_deg, &error, where, -1e6) ||
-        !ReadNumber(cj, "fov_y_deg", &s.rig.fov_y_deg, &error, where, 1))
-      return Fail<Scene>(error);
-    if (s.rig.elevation_deg > 89 || s.rig.fov_y_deg > 170)
-      return Fail<Scene>(where + ": elevation_deg must be <= 89 and fov_y_deg <= 170");
+    const std::string where = source + ": camera";
+    if (!cj.is_object()) return R::Failure(where + ": must be an object");
+    FieldReader r(cj, where);
+    r.Keys({"target", "distance", "elevation_deg", "azimuth_deg", "fov_y_deg"})
+        .Vec3("target", &s.rig.target)
+        .Number("distance", &s.rig.distance, 1e-6, kMaxCoordinate)
+        .Number("elevation_deg", &s.rig.elevation_deg, -89, 89)
+        .Number("azimuth_deg", &s.rig.azimuth_deg, -1e6, 1e6)
+        .Number("fov_y_deg", &s.rig.fov_y_deg, 1, 170);
+    if (!r.ok()) return R::Failure(r.error());
   }
-  Parsed<Scene> p;
-  p.value = std::move(s);
-  return p;
+  return s;
 }
 
-Parsed<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading::MaterialDesc& base) {
-  using R = Parsed<shading::MaterialDesc>;
+Result<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading::MaterialDesc& base) {
+  using R = Result<shading::MaterialDesc>;
   const std::string usage = " (expected NDF:ALPHA[,ALPHA_Y][,f0=V|R/G/B][,albedo=V|R/G/B], e.g. ggx:0.05)";
   shading::MaterialDesc m = base;
   auto colon = spec.find(':');
-  if (colon == std::string_view::npos) return Fail<shading::MaterialDesc>("material '" + std::string(spec) + "'" + usage);
+  if (colon == std::string_view::npos) return R::Failure("material '" + std::string(spec) + "'" + usage);
   auto ndf = shading::ParseNdf(spec.substr(0, colon));
   if (!ndf)
-    return Fail<shading::MaterialDesc>("material '" + std::string(spec) + "': NDF must be ggx or beckmann" + usage);
+    return R::Failure("material '" + std::string(spec) + "': NDF must be ggx or beckmann" + usage);
   m.ndf = *ndf;
   std::vector<double> alphas;
   std::stringstream ss{std::string(spec.substr(colon + 1))};
@@ -351,31 +406,29 @@ Parsed<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading
         used = 0;
       }
       if (used == 0 || used != item.size() || !std::isfinite(a) || a <= 0 || a > 1)
-        return Fail<shading::MaterialDesc>("material '" + std::string(spec) + "': roughness '" + item +
+        return R::Failure("material '" + std::string(spec) + "': roughness '" + item +
                                            "' must be a number in (0, 1]");
-      if (alphas.size() == 2) return Fail<shading::MaterialDesc>("material '" + std::string(spec) + "': at most two roughness values" + usage);
+      if (alphas.size() == 2) return R::Failure("material '" + std::string(spec) + "': at most two roughness values" + usage);
       alphas.push_back(a);
       continue;
     }
     std::string key = item.substr(0, eq), value = item.substr(eq + 1);
     glm::dvec3 rgb;
     if (!ParseRgb(value, &rgb))
-      return Fail<shading::MaterialDesc>("material '" + std::string(spec) + "': " + key + " expects V or R/G/B (>= 0), got '" + value + "'");
+      return R::Failure("material '" + std::string(spec) + "': " + key + " expects V or R/G/B (>= 0), got '" + value + "'");
     if (key == "f0") {
       if (glm::any(glm::greaterThan(rgb, glm::dvec3(1))))
-        return Fail<shading::MaterialDesc>("material '" + std::string(spec) + "': f0 must be <= 1");
+        return R::Failure("material '" + std::string(spec) + "': f0 must be <= 1");
       m.f0 = rgb;
     } else if (key == "albedo") {
       m.albedo = rgb;
     } else {
-      return Fail<shading::MaterialDesc>("material '" + std::string(spec) + "': unknown field '" + key + "'" + usage);
+      return R::Failure("material '" + std::string(spec) + "': unknown field '" + key + "'" + usage);
     }
   }
-  if (alphas.empty()) return Fail<shading::MaterialDesc>("material '" + std::string(spec) + "': no roughness" + usage);
+  if (alphas.empty()) return R::Failure("material '" + std::string(spec) + "': no roughness" + usage);
   m.alpha = {alphas[0], alphas.size() > 1 ? alphas[1] : alphas[0]};
-  R r;
-  r.value = m;
-  return r;
+  return m;
 }
 
 std::string MaterialSpec(const shading::MaterialDesc& m) {
@@ -432,12 +485,30 @@ std::vector<glm::vec4> PackScene(const Scene& scene) {
 
 // --- camera paths -------------------------------------------------------------
 
-std::vector<std::string_view> CameraPathNames() { return {"orbit", "pan", "dolly", "vr-jitter", "static"}; }
+namespace {
+constexpr std::pair<CameraPath, std::string_view> kCameraPaths[] = {{CameraPath::kOrbit, "orbit"},
+                                                                    {CameraPath::kPan, "pan"},
+                                                                    {CameraPath::kDolly, "dolly"},
+                                                                    {CameraPath::kVrJitter, "vr-jitter"},
+                                                                    {CameraPath::kStatic, "static"}};
+}  // namespace
 
-bool IsCameraPath(std::string_view name) {
-  for (auto n : CameraPathNames())
-    if (n == name) return true;
-  return false;
+std::vector<std::string_view> CameraPathNames() {
+  std::vector<std::string_view> names;
+  for (const auto& [path, name] : kCameraPaths) names.push_back(name);
+  return names;
+}
+
+std::optional<CameraPath> ParseCameraPath(std::string_view name) {
+  for (const auto& [path, n] : kCameraPaths)
+    if (n == name) return path;
+  return std::nullopt;
+}
+
+std::string_view CameraPathName(CameraPath path) {
+  for (const auto& [p, name] : kCameraPaths)
+    if (p == path) return name;
+  return "static";
 }
 
 namespace {
@@ -465,24 +536,25 @@ glm::dvec3 Spherical(double distance, double elevation_deg, double azimuth_deg) 
 // distance per second, looking in a fixed direction. dolly: the distance
 // halves every 2 seconds (the footprint scale changes). vr-jitter: head-tracking
 // tremor, sums of sines of ~0.3% of the distance and ~0.2 degrees of rotation.
-shading::CameraDesc CameraAt(std::string_view path, const CameraRig& rig, int frame, double fps, int width,
+shading::CameraDesc CameraAt(CameraPath path, const CameraRig& rig, int frame, double fps, int width,
                              int height) {
   const double t = frame / fps;
   glm::dvec3 pos = rig.target + Spherical(rig.distance, rig.elevation_deg, rig.azimuth_deg);
-  if (path == "orbit") {
+  switch (path) {
+  case CameraPath::kOrbit: {
     pos = rig.target + Spherical(rig.distance, rig.elevation_deg, rig.azimuth_deg + 45.0 * t);
     return LookAt(pos, rig.target, rig.fov_y_deg, width, height);
   }
-  if (path == "pan") {
+  case CameraPath::kPan: {
     shading::CameraDesc c0 = LookAt(pos, rig.target, rig.fov_y_deg, width, height);
     glm::dvec3 shift = c0.right * (0.1 * rig.distance * t);
     return LookAt(pos + shift, rig.target + shift, rig.fov_y_deg, width, height);
   }
-  if (path == "dolly") {
+  case CameraPath::kDolly: {
     pos = rig.target + Spherical(rig.distance * std::exp2(-t / 2.0), rig.elevation_deg, rig.azimuth_deg);
     return LookAt(pos, rig.target, rig.fov_y_deg, width, height);
   }
-  if (path == "vr-jitter") {
+  case CameraPath::kVrJitter: {
     const double a = 0.003 * rig.distance, w = 2 * kPi;
     glm::dvec3 d{std::sin(w * 0.7 * t) + 0.5 * std::sin(w * 2.9 * t + 1.0),
                  std::sin(w * 1.3 * t + 2.0) + 0.4 * std::sin(w * 3.7 * t),
@@ -493,7 +565,9 @@ shading::CameraDesc CameraAt(std::string_view path, const CameraRig& rig, int fr
     glm::dvec3 p = pos + a * d;
     return LookAt(p, p + look, rig.fov_y_deg, width, height);
   }
-  return LookAt(pos, rig.target, rig.fov_y_deg, width, height);  // static
+  case CameraPath::kStatic: break;
+  }
+  return LookAt(pos, rig.target, rig.fov_y_deg, width, height);
 }
 
 }  // namespace shimmer::scene

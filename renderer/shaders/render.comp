@@ -68,9 +68,7 @@ FilteredNdf runVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p)
 }
 #endif
 
-// Channel planes of the image buffer (renderer/render/frame.h lists the same).
-const int CH_BEAUTY = 0, CH_SPECULAR = 3, CH_DIFFUSE = 6, CH_MOTION = 9, CH_DEPTH = 11, CH_NORMAL = 12,
-          CH_ROUGHNESS = 15, CH_FOOTPRINT = 16, CH_STDERR = 18, CH_COUNT = 19, CH_M2 = 20;
+#include "channels.glsl"
 
 Camera loadCamera(CameraGpu g) {
   Camera c;

@@ -1,4 +1,4 @@
-#include "shading.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::shading {
 namespace embedded {

@@ -1,5 +1,5 @@
 // The GLSL shading core compiled as C++, once per precision.
-#include "shading.h"
+#include "shimmer/renderer/shading.h"
 
 #include <glm/glm.hpp>
 

@@ -6,7 +6,7 @@
 
 #include <mutex>
 
-#include "shading.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::shading {
 
@@ -39,9 +39,8 @@ void InitializeOnce() {
 
 }  // namespace
 
-SpirvResult CompileCompute(const GlslFile& main, std::span<const GlslFile> extra) {
+Result<Spirv> CompileCompute(const GlslFile& main, std::span<const GlslFile> extra) {
   InitializeOnce();
-  SpirvResult result;
   glslang::TShader shader(EShLangCompute);
   const char* text = main.text.c_str();
   const int length = static_cast<int>(main.text.size());
@@ -53,20 +52,19 @@ SpirvResult CompileCompute(const GlslFile& main, std::span<const GlslFile> extra
   const auto messages = static_cast<EShMessages>(EShMsgSpvRules | EShMsgVulkanRules);
   SourceIncluder includer(extra);
   if (!shader.parse(GetDefaultResources(), 460, false, messages, includer)) {
-    result.error = std::string(shader.getInfoLog()) + shader.getInfoDebugLog();
-    return result;
+    return Result<Spirv>::Failure(std::string(shader.getInfoLog()) + shader.getInfoDebugLog());
   }
   glslang::TProgram program;
   program.addShader(&shader);
   if (!program.link(messages)) {
-    result.error = std::string(program.getInfoLog()) + program.getInfoDebugLog();
-    return result;
+    return Result<Spirv>::Failure(std::string(program.getInfoLog()) + program.getInfoDebugLog());
   }
   glslang::SpvOptions options;
   options.disableOptimizer = false;
-  glslang::GlslangToSpv(*program.getIntermediate(EShLangCompute), result.words, &options);
-  if (result.words.empty()) result.error = main.name + ": SPIR-V generation produced no code";
-  return result;
+  Spirv words;
+  glslang::GlslangToSpv(*program.getIntermediate(EShLangCompute), words, &options);
+  if (words.empty()) return Result<Spirv>::Failure(main.name + ": SPIR-V generation produced no code", ErrorCode::kInternal);
+  return words;
 }
 
 }  // namespace shimmer::shading

@@ -8,6 +8,8 @@
 #include <string_view>
 #include <vector>
 
+#include "shimmer/core/result.h"
+
 namespace shimmer::shading {
 
 struct GlslFile {
@@ -15,14 +17,11 @@ struct GlslFile {
   std::string text;
 };
 
-struct SpirvResult {
-  std::vector<std::uint32_t> words;
-  std::string error;  // empty on success; otherwise glslang's log with file:line
-  bool ok() const { return error.empty(); }
-};
+using Spirv = std::vector<std::uint32_t>;
 
 // Compiles a compute shader for Vulkan 1.2 (SPIR-V 1.5). `#include "x"`
-// resolves against `extra` first, then the shading core (GlslSources()).
-SpirvResult CompileCompute(const GlslFile& main, std::span<const GlslFile> extra = {});
+// resolves against `extra` first, then the shading core (GlslSources()). The
+// error is glslang's log, whose lines start with "ERROR: <file>:<line>:".
+Result<Spirv> CompileCompute(const GlslFile& main, std::span<const GlslFile> extra = {});
 
 }  // namespace shimmer::shading

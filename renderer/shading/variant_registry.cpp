@@ -3,7 +3,7 @@
 #include <cmath>
 #include <string>
 
-#include "shading.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::shading {
 
@@ -89,42 +89,5 @@ std::optional<Ndf> ParseNdf(std::string_view name) {
 }
 
 std::string_view NdfName(Ndf ndf) { return ndf == Ndf::kGgx ? "ggx" : "beckmann"; }
-
-double ParamValue(const Params<double>& params, std::string_view name) {
-  if (name == "fp_max") return params.fp_max;
-  if (name == "fp_min_cap") return params.fp_min_cap;
-  if (name == "sigma2") return params.sigma2;
-  return params.kappa;
-}
-
-ResolvedParams ResolveParams(const VariantInfo& info,
-                             std::span<const std::pair<std::string, double>> overrides) {
-  ResolvedParams r;
-  auto slot = [&r](std::string_view name) -> double* {
-    if (name == "fp_max") return &r.values.fp_max;
-    if (name == "fp_min_cap") return &r.values.fp_min_cap;
-    if (name == "sigma2") return &r.values.sigma2;
-    if (name == "kappa") return &r.values.kappa;
-    return nullptr;
-  };
-  for (const ParamInfo& p : info.params) *slot(p.name) = p.default_value;
-  for (const auto& [name, value] : overrides) {
-    bool known = false;
-    for (const ParamInfo& p : info.params) known = known || p.name == name;
-    if (!known) {
-      std::string list;
-      for (const ParamInfo& p : info.params) list += (list.empty() ? "" : ", ") + std::string(p.name);
-      r.error = "variant " + std::string(info.name) + " has no parameter '" + name + "'" +
-                (list.empty() ? " (it takes none)" : " (it takes: " + list + ")");
-      return r;
-    }
-    if (!std::isfinite(value) || value < 0) {
-      r.error = "parameter " + name + " must be a finite value >= 0, got " + std::to_string(value);
-      return r;
-    }
-    *slot(name) = value;
-  }
-  return r;
-}
 
 }  // namespace shimmer::shading

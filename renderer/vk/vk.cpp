@@ -14,6 +14,7 @@ namespace {
 
 std::string ResultName(VkResult r) {
   switch (r) {
+    case VK_SUCCESS: return "success";
     case VK_ERROR_OUT_OF_HOST_MEMORY: return "out of host memory";
     case VK_ERROR_OUT_OF_DEVICE_MEMORY: return "out of device memory";
     case VK_ERROR_INITIALIZATION_FAILED: return "initialization failed";
@@ -26,6 +27,17 @@ std::string ResultName(VkResult r) {
     default: return "VkResult " + std::to_string(static_cast<int>(r));
   }
 }
+
+ErrorCode CodeOf(VkResult r) {
+  switch (r) {
+    case VK_ERROR_OUT_OF_HOST_MEMORY:
+    case VK_ERROR_OUT_OF_DEVICE_MEMORY: return ErrorCode::kOutOfMemory;
+    case VK_ERROR_DEVICE_LOST: return ErrorCode::kDeviceLost;
+    default: return ErrorCode::kInternal;
+  }
+}
+
+Error VulkanError(const std::string& what, VkResult r) { return Error{CodeOf(r), what + ": " + ResultName(r)}; }
 
 std::string TypeName(VkPhysicalDeviceType t) {
   switch (t) {
@@ -58,12 +70,16 @@ int ComputeQueueFamily(VkPhysicalDevice pd) {
 }
 
 DeviceInfo Describe(VkPhysicalDevice pd) {
+  VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
   VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+  subgroup.pNext = &driver;
   VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
   props.pNext = &subgroup;
   vkGetPhysicalDeviceProperties2(pd, &props);
   DeviceInfo info;
   info.name = props.properties.deviceName;
+  info.driver = driver.driverName;
+  if (driver.driverInfo[0]) info.driver += std::string(" ") + driver.driverInfo;
   info.type = TypeName(props.properties.deviceType);
   info.api_version = props.properties.apiVersion;
   info.subgroup_size = subgroup.subgroupSize;
@@ -117,9 +133,10 @@ struct Instance {
 
 bool HasValidationLayer() {
   std::uint32_t n = 0;
-  vkEnumerateInstanceLayerProperties(&n, nullptr);
+  if (vkEnumerateInstanceLayerProperties(&n, nullptr) != VK_SUCCESS) return false;
   std::vector<VkLayerProperties> available(n);
-  vkEnumerateInstanceLayerProperties(&n, available.data());
+  if (vkEnumerateInstanceLayerProperties(&n, available.data()) < VK_SUCCESS) return false;
+  available.resize(n);
   for (const auto& l : available)
     if (std::strcmp(l.layerName, "VK_LAYER_KHRONOS_validation") == 0) return true;
   return false;
@@ -155,9 +172,10 @@ Instance CreateInstance(ValidationLog* log) {
 
 std::vector<VkPhysicalDevice> UsableDevices(VkInstance instance) {
   std::uint32_t n = 0;
-  vkEnumeratePhysicalDevices(instance, &n, nullptr);
+  if (vkEnumeratePhysicalDevices(instance, &n, nullptr) != VK_SUCCESS) return {};
   std::vector<VkPhysicalDevice> all(n);
-  vkEnumeratePhysicalDevices(instance, &n, all.data());
+  if (vkEnumeratePhysicalDevices(instance, &n, all.data()) < VK_SUCCESS) return {};
+  all.resize(n);
   std::vector<VkPhysicalDevice> usable;
   for (VkPhysicalDevice pd : all) {
     VkPhysicalDeviceProperties p;
@@ -242,28 +260,22 @@ struct Context::Impl {
   }
 };
 
-std::vector<DeviceInfo> Context::ListDevices(std::string* error) {
+Result<std::vector<DeviceInfo>> Context::ListDevices() {
   Instance inst = CreateInstance(nullptr);
   std::vector<DeviceInfo> out;
-  if (!inst.handle) {
-    if (error) *error = inst.error;
-    return out;
-  }
+  if (!inst.handle) return Result<std::vector<DeviceInfo>>::Failure(inst.error, ErrorCode::kInternal);
   for (VkPhysicalDevice pd : UsableDevices(inst.handle)) out.push_back(Describe(pd));
   vkDestroyInstance(inst.handle, nullptr);
   return out;
 }
 
-Expected<Context> Context::Create(const ContextOptions& options) {
-  Expected<Context> out;
+Result<std::unique_ptr<Context>> Context::Create(const ContextOptions& options) {
+  using R = Result<std::unique_ptr<Context>>;
   std::unique_ptr<Context> ctx(new Context());
   ctx->impl_ = std::make_unique<Impl>();
   Impl& c = *ctx->impl_;
   Instance inst = CreateInstance(options.validation ? &c.validation_log : nullptr);
-  if (!inst.handle) {
-    out.error = inst.error;
-    return out;
-  }
+  if (!inst.handle) return R::Failure(inst.error, ErrorCode::kInternal);
   c.instance = inst.handle;
   c.validation = inst.validation;
   c.lose_device_after = options.lose_device_after_dispatches;
@@ -274,10 +286,9 @@ Expected<Context> Context::Create(const ContextOptions& options) {
     if (!create || create(c.instance, &info, nullptr, &c.messenger) != VK_SUCCESS) c.validation = false;
   }
   std::vector<VkPhysicalDevice> devices = UsableDevices(c.instance);
-  if (devices.empty()) {
-    out.error = "no Vulkan 1.2 device with a compute queue was found (install Mesa lavapipe: mesa-vulkan-drivers)";
-    return out;
-  }
+  if (devices.empty())
+    return R::Failure("no Vulkan 1.2 device with a compute queue was found (install Mesa lavapipe: mesa-vulkan-drivers)",
+                      ErrorCode::kInternal);
   std::vector<VkPhysicalDevice> candidates;
   std::string names;
   for (VkPhysicalDevice pd : devices) {
@@ -286,10 +297,8 @@ Expected<Context> Context::Create(const ContextOptions& options) {
     if (options.device_name.empty() || info.name.find(options.device_name) != std::string::npos)
       candidates.push_back(pd);
   }
-  if (candidates.empty()) {
-    out.error = "no Vulkan device matches '" + options.device_name + "' (available: " + names + ")";
-    return out;
-  }
+  if (candidates.empty())
+    return R::Failure("no Vulkan device matches '" + options.device_name + "' (available: " + names + ")");
   std::stable_sort(candidates.begin(), candidates.end(), [](VkPhysicalDevice a, VkPhysicalDevice b) {
     VkPhysicalDeviceProperties pa, pb;
     vkGetPhysicalDeviceProperties(a, &pa);
@@ -314,29 +323,34 @@ Expected<Context> Context::Create(const ContextOptions& options) {
   VkResult r = vkCreateDevice(c.physical, &dci, nullptr, &c.device);
   if (r != VK_SUCCESS) {
     c.device = VK_NULL_HANDLE;
-    out.error = "could not create a Vulkan device on '" + ctx->info_.name + "': " + ResultName(r);
-    return out;
+    return VulkanError("could not create a Vulkan device on '" + ctx->info_.name + "'", r);
   }
   vkGetDeviceQueue(c.device, c.family, 0, &c.queue);
   VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
   pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
   pci.queueFamilyIndex = c.family;
-  vkCreateCommandPool(c.device, &pci, nullptr, &c.pool);
+  if (r = vkCreateCommandPool(c.device, &pci, nullptr, &c.pool); r != VK_SUCCESS) {
+    c.pool = VK_NULL_HANDLE;
+    return VulkanError("could not create a command pool", r);
+  }
   VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
   cai.commandPool = c.pool;
   cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
   cai.commandBufferCount = 1;
-  vkAllocateCommandBuffers(c.device, &cai, &c.cmd);
+  if (r = vkAllocateCommandBuffers(c.device, &cai, &c.cmd); r != VK_SUCCESS)
+    return VulkanError("could not allocate a command buffer", r);
   VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-  vkCreateFence(c.device, &fci, nullptr, &c.fence);
+  if (r = vkCreateFence(c.device, &fci, nullptr, &c.fence); r != VK_SUCCESS) {
+    c.fence = VK_NULL_HANDLE;
+    return VulkanError("could not create a fence", r);
+  }
   if (ctx->info_.timestamp_period_ns > 0) {
     VkQueryPoolCreateInfo qpi{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     qpi.queryType = VK_QUERY_TYPE_TIMESTAMP;
     qpi.queryCount = 2;
     if (vkCreateQueryPool(c.device, &qpi, nullptr, &c.queries) != VK_SUCCESS) c.queries = VK_NULL_HANDLE;
   }
-  out.value = std::move(ctx);
-  return out;
+  return ctx;
 }
 
 Context::~Context() = default;
@@ -348,20 +362,18 @@ std::vector<std::string> Context::TakeValidationMessages() {
   return std::exchange(impl_->validation_log.messages, {});
 }
 
-Expected<Buffer> Context::CreateBuffer(std::size_t bytes, BufferKind kind) {
-  Expected<Buffer> out;
+Result<std::unique_ptr<Buffer>> Context::CreateBuffer(std::size_t bytes, BufferKind kind) {
+  using R = Result<std::unique_ptr<Buffer>>;
   Impl& c = *impl_;
   bytes = std::max<std::size_t>(bytes, 16);
-  if (kind == BufferKind::kStorage && bytes > info_.max_storage_buffer_range) {
-    out.error = "a storage buffer of " + std::to_string(bytes >> 20) + " MiB exceeds the device's limit of " +
-                std::to_string(info_.max_storage_buffer_range >> 20) + " MiB";
-    return out;
-  }
-  if (kind == BufferKind::kUniform && bytes > info_.max_uniform_buffer_range) {
-    out.error = "a uniform buffer of " + std::to_string(bytes) + " bytes exceeds the device's limit of " +
-                std::to_string(info_.max_uniform_buffer_range) + " bytes";
-    return out;
-  }
+  if (kind == BufferKind::kStorage && bytes > info_.max_storage_buffer_range)
+    return R::Failure("a storage buffer of " + std::to_string(bytes >> 20) + " MiB exceeds the device's limit of " +
+                          std::to_string(info_.max_storage_buffer_range >> 20) + " MiB",
+                      ErrorCode::kOutOfMemory);
+  if (kind == BufferKind::kUniform && bytes > info_.max_uniform_buffer_range)
+    return R::Failure("a uniform buffer of " + std::to_string(bytes) + " bytes exceeds the device's limit of " +
+                          std::to_string(info_.max_uniform_buffer_range) + " bytes",
+                      ErrorCode::kOutOfMemory);
   std::unique_ptr<Buffer> buf(new Buffer());
   buf->impl_ = std::make_unique<Buffer::Impl>();
   buf->impl_->device = c.device;
@@ -372,8 +384,7 @@ Expected<Buffer> Context::CreateBuffer(std::size_t bytes, BufferKind kind) {
   VkResult r = vkCreateBuffer(c.device, &bci, nullptr, &buf->impl_->buffer);
   if (r != VK_SUCCESS) {
     buf->impl_->buffer = VK_NULL_HANDLE;
-    out.error = "could not create a buffer: " + ResultName(r);
-    return out;
+    return VulkanError("could not create a buffer", r);
   }
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(c.device, buf->impl_->buffer, &req);
@@ -383,37 +394,29 @@ Expected<Buffer> Context::CreateBuffer(std::size_t bytes, BufferKind kind) {
   std::uint32_t type = UINT32_MAX;
   for (std::uint32_t i = 0; i < mp.memoryTypeCount && type == UINT32_MAX; ++i)
     if ((req.memoryTypeBits & (1u << i)) && (mp.memoryTypes[i].propertyFlags & want) == want) type = i;
-  if (type == UINT32_MAX) {
-    out.error = "the device has no host-visible coherent memory";
-    return out;
-  }
+  if (type == UINT32_MAX) return R::Failure("the device has no host-visible coherent memory", ErrorCode::kInternal);
   VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   mai.allocationSize = req.size;
   mai.memoryTypeIndex = type;
   r = vkAllocateMemory(c.device, &mai, nullptr, &buf->impl_->memory);
   if (r != VK_SUCCESS) {
     buf->impl_->memory = VK_NULL_HANDLE;
-    out.error = "could not allocate " + std::to_string(bytes >> 20) + " MiB: " + ResultName(r);
-    return out;
+    return VulkanError("could not allocate " + std::to_string(bytes >> 20) + " MiB", r);
   }
-  vkBindBufferMemory(c.device, buf->impl_->buffer, buf->impl_->memory, 0);
-  r = vkMapMemory(c.device, buf->impl_->memory, 0, VK_WHOLE_SIZE, 0, &buf->mapped_);
-  if (r != VK_SUCCESS) {
-    out.error = "could not map a buffer: " + ResultName(r);
-    return out;
-  }
+  if (r = vkBindBufferMemory(c.device, buf->impl_->buffer, buf->impl_->memory, 0); r != VK_SUCCESS)
+    return VulkanError("could not bind a buffer's memory", r);
+  if (r = vkMapMemory(c.device, buf->impl_->memory, 0, VK_WHOLE_SIZE, 0, &buf->mapped_); r != VK_SUCCESS)
+    return VulkanError("could not map a buffer", r);
   buf->size_ = bytes;
   buf->kind_ = kind;
   std::memset(buf->mapped_, 0, bytes);
-  out.value = std::move(buf);
-  return out;
+  return buf;
 }
 
-Expected<ComputePipeline> Context::CreatePipeline(std::span<const std::uint32_t> spirv,
-                                                  std::span<const std::int32_t> specialization,
-                                                  std::span<const BufferKind> buffer_kinds,
-                                                  std::uint32_t push_bytes) {
-  Expected<ComputePipeline> out;
+Result<std::unique_ptr<ComputePipeline>> Context::CreatePipeline(std::span<const std::uint32_t> spirv,
+                                                                 std::span<const std::int32_t> specialization,
+                                                                 std::span<const BufferKind> buffer_kinds,
+                                                                 std::uint32_t push_bytes) {
   VkDevice d = impl_->device;
   std::unique_ptr<ComputePipeline> p(new ComputePipeline());
   p->impl_ = std::make_unique<ComputePipeline::Impl>();
@@ -422,9 +425,8 @@ Expected<ComputePipeline> Context::CreatePipeline(std::span<const std::uint32_t>
   pi.bindings.assign(buffer_kinds.begin(), buffer_kinds.end());
   const auto buffer_count = static_cast<std::uint32_t>(buffer_kinds.size());
   pi.push_bytes = push_bytes;
-  auto fail = [&out](const std::string& what, VkResult r) {
-    out.error = "could not create the compute pipeline (" + what + "): " + ResultName(r);
-    return std::move(out);
+  auto fail = [](const std::string& what, VkResult r) -> Result<std::unique_ptr<ComputePipeline>> {
+    return VulkanError("could not create the compute pipeline (" + what + ")", r);
   };
   VkShaderModuleCreateInfo smci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
   smci.codeSize = spirv.size_bytes();
@@ -475,26 +477,20 @@ Expected<ComputePipeline> Context::CreatePipeline(std::span<const std::uint32_t>
   dsai.descriptorSetCount = 1;
   dsai.pSetLayouts = &pi.set_layout;
   if (VkResult r = vkAllocateDescriptorSets(d, &dsai, &pi.set); r != VK_SUCCESS) return fail("descriptor set", r);
-  out.value = std::move(p);
-  return out;
+  return p;
 }
 
-DispatchResult Context::Dispatch(ComputePipeline& pipeline, std::span<Buffer* const> buffers,
+Result<double> Context::Dispatch(ComputePipeline& pipeline, std::span<Buffer* const> buffers,
                                  std::span<const std::byte> push, std::uint32_t groups_x, std::uint32_t groups_y) {
-  DispatchResult result;
   Impl& c = *impl_;
   ComputePipeline::Impl& pi = *pipeline.impl_;
   std::lock_guard lock(c.dispatch_mutex);
-  if (c.lost) {
-    result.error = "device lost";
-    return result;
-  }
+  if (c.lost) return Result<double>::Failure("device lost", ErrorCode::kDeviceLost);
   bool match = buffers.size() == pi.bindings.size() && push.size() == pi.push_bytes;
   for (std::size_t i = 0; match && i < buffers.size(); ++i) match = buffers[i]->kind() == pi.bindings[i];
-  if (!match) {
-    result.error = "dispatch does not match the pipeline's buffers or push constants";
-    return result;
-  }
+  if (!match)
+    return Result<double>::Failure("dispatch does not match the pipeline's buffers or push constants",
+                                   ErrorCode::kInternal);
   std::vector<VkDescriptorBufferInfo> infos(buffers.size());
   std::vector<VkWriteDescriptorSet> writes(buffers.size());
   for (std::size_t i = 0; i < buffers.size(); ++i) {
@@ -508,10 +504,12 @@ DispatchResult Context::Dispatch(ComputePipeline& pipeline, std::span<Buffer* co
   }
   vkUpdateDescriptorSets(c.device, static_cast<std::uint32_t>(writes.size()), writes.data(), 0, nullptr);
 
-  vkResetCommandBuffer(c.cmd, 0);
+  if (VkResult r = vkResetCommandBuffer(c.cmd, 0); r != VK_SUCCESS)
+    return VulkanError("could not reset the command buffer", r);
   VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-  vkBeginCommandBuffer(c.cmd, &begin);
+  if (VkResult r = vkBeginCommandBuffer(c.cmd, &begin); r != VK_SUCCESS)
+    return VulkanError("could not record the dispatch", r);
   if (c.queries) {
     vkCmdResetQueryPool(c.cmd, c.queries, 0, 2);
     vkCmdWriteTimestamp(c.cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, c.queries, 0);
@@ -529,7 +527,7 @@ DispatchResult Context::Dispatch(ComputePipeline& pipeline, std::span<Buffer* co
   barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
   vkCmdPipelineBarrier(c.cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0,
                        nullptr, 0, nullptr);
-  vkEndCommandBuffer(c.cmd);
+  if (VkResult r = vkEndCommandBuffer(c.cmd); r != VK_SUCCESS) return VulkanError("could not record the dispatch", r);
 
   VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
   submit.commandBufferCount = 1;
@@ -539,20 +537,19 @@ DispatchResult Context::Dispatch(ComputePipeline& pipeline, std::span<Buffer* co
   if (r == VK_SUCCESS) r = vkWaitForFences(c.device, 1, &c.fence, VK_TRUE, UINT64_MAX);
   if (c.lose_device_after >= 0 && c.dispatches++ >= c.lose_device_after) r = VK_ERROR_DEVICE_LOST;
   auto stop = std::chrono::steady_clock::now();
-  vkResetFences(c.device, 1, &c.fence);
+  if (r == VK_SUCCESS) r = vkResetFences(c.device, 1, &c.fence);
   if (r != VK_SUCCESS) {
     c.lost = c.lost || r == VK_ERROR_DEVICE_LOST;
-    result.error = "the GPU dispatch failed: " + ResultName(r);
-    return result;
+    return VulkanError("the GPU dispatch failed", r);
   }
-  result.gpu_ms = std::chrono::duration<double, std::milli>(stop - start).count();
+  double gpu_ms = std::chrono::duration<double, std::milli>(stop - start).count();
   if (c.queries) {
     std::uint64_t stamps[2] = {0, 0};
     if (vkGetQueryPoolResults(c.device, c.queries, 0, 2, sizeof(stamps), stamps, sizeof(std::uint64_t),
                               VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS)
-      result.gpu_ms = double(stamps[1] - stamps[0]) * info_.timestamp_period_ns * 1e-6;
+      gpu_ms = double(stamps[1] - stamps[0]) * info_.timestamp_period_ns * 1e-6;
   }
-  return result;
+  return gpu_ms;
 }
 
 }  // namespace shimmer::vk

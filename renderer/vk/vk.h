@@ -11,18 +11,13 @@
 #include <string>
 #include <vector>
 
-namespace shimmer::vk {
+#include "shimmer/core/result.h"
 
-// A value or the message saying why there is none.
-template <class T>
-struct Expected {
-  std::unique_ptr<T> value;
-  std::string error;
-  explicit operator bool() const { return value != nullptr; }
-};
+namespace shimmer::vk {
 
 struct DeviceInfo {
   std::string name;
+  std::string driver;  // driver name and version text, e.g. "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)"
   std::string type;  // "discrete", "integrated", "virtual", "cpu", "other"
   std::uint32_t api_version = 0;
   std::uint32_t subgroup_size = 0;
@@ -47,6 +42,8 @@ struct ContextOptions {
   // its device, so the handling would otherwise go untested. -1: never.
   int lose_device_after_dispatches = -1;
 };
+
+// Errors carry ErrorCode::kDeviceLost or kOutOfMemory where Vulkan says so.
 
 class Context;
 
@@ -82,16 +79,11 @@ class ComputePipeline {
   std::unique_ptr<Impl> impl_;
 };
 
-struct DispatchResult {
-  double gpu_ms = 0;  // from timestamps around the dispatch; wall time when there are none
-  std::string error;  // empty on success (e.g. "device lost")
-};
-
 class Context {
  public:
   // Every Vulkan 1.2 device with a compute queue, as the loader lists them.
-  static std::vector<DeviceInfo> ListDevices(std::string* error);
-  static Expected<Context> Create(const ContextOptions& options);
+  static Result<std::vector<DeviceInfo>> ListDevices();
+  static Result<std::unique_ptr<Context>> Create(const ContextOptions& options);
   ~Context();
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
@@ -102,15 +94,18 @@ class Context {
   // The layer's warnings and errors since the last call, oldest first.
   std::vector<std::string> TakeValidationMessages();
 
-  Expected<Buffer> CreateBuffer(std::size_t bytes, BufferKind kind = BufferKind::kStorage);
+  Result<std::unique_ptr<Buffer>> CreateBuffer(std::size_t bytes, BufferKind kind = BufferKind::kStorage);
   // A compute pipeline over buffers of the given kinds at bindings 0..n-1,
   // push constants of `push_bytes`, int specialization constants with ids 0..k-1.
-  Expected<ComputePipeline> CreatePipeline(std::span<const std::uint32_t> spirv,
-                                           std::span<const std::int32_t> specialization,
-                                           std::span<const BufferKind> bindings, std::uint32_t push_bytes);
+  Result<std::unique_ptr<ComputePipeline>> CreatePipeline(std::span<const std::uint32_t> spirv,
+                                                          std::span<const std::int32_t> specialization,
+                                                          std::span<const BufferKind> bindings,
+                                                          std::uint32_t push_bytes);
   // Records, submits and waits for one dispatch of groups_x * groups_y
-  // workgroups. Thread-safe: dispatches from several threads run one at a time.
-  DispatchResult Dispatch(ComputePipeline& pipeline, std::span<Buffer* const> buffers,
+  // workgroups; returns its GPU milliseconds, from timestamps around the
+  // dispatch (wall time when the queue has none). Thread-safe: dispatches
+  // from several threads run one at a time.
+  Result<double> Dispatch(ComputePipeline& pipeline, std::span<Buffer* const> buffers,
                           std::span<const std::byte> push, std::uint32_t groups_x, std::uint32_t groups_y);
 
  private:

@@ -3,8 +3,8 @@
 
 #include <cmath>
 
-#include "fit.h"
-#include "fit_run.h"
+#include "shimmer/experiments/fit.h"
+#include "shimmer/experiments/fit_run.h"
 
 namespace shimmer::experiments {
 namespace {

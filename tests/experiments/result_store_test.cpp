@@ -1,11 +1,14 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <set>
 #include <filesystem>
 #include <fstream>
 
-#include "job.h"
-#include "result_store.h"
-#include "spec.h"
+#include "shimmer/experiments/job.h"
+#include "shimmer/experiments/result_store.h"
+#include "shimmer/experiments/spec.h"
 
 namespace shimmer::experiments {
 namespace {
@@ -41,55 +44,186 @@ JobResult MakeResult(const std::string& variant, double fp_max, double tv_ratio)
 
 TEST(ResultStore, InsertThenFindAndReadBack) {
   TempDir dir;
-  auto [store, error] = ResultStore::Open((dir.path / "r.db").string());
-  ASSERT_TRUE(store) << error;
-  const JobResult r = MakeResult("k16-beckmann-rect", 0.5, 3.0);
-  EXPECT_FALSE(store->Has(r.id));
-  ASSERT_EQ(store->Insert(r), "");
-  EXPECT_TRUE(store->Has(r.id));
-  const auto rows = store->All();
+  auto opened = ResultStore::Open((dir.path / "r.db").string());
+  ASSERT_TRUE(opened) << opened.error();
+  std::unique_ptr<ResultStore> store = std::move(*opened);
+  JobResult r = MakeResult("k16-beckmann-rect", 0.5, 3.0);
+  r.device = "test device";
+  r.driver = "test driver 1.0";
+  EXPECT_FALSE(*store->Has(r.id));
+  ASSERT_TRUE(store->Insert(r));
+  EXPECT_TRUE(*store->Has(r.id));
+  const auto rows = *store->All();
   ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].device, "test device");
+  EXPECT_EQ(rows[0].driver, "test driver 1.0");
   EXPECT_EQ(rows[0].job.ToJson(), r.job.ToJson());
   EXPECT_EQ(rows[0].metrics, r.metrics);
   EXPECT_DOUBLE_EQ(rows[0].gpu_ms_per_frame, 1.5);
   // Reopening sees the same row: it was committed.
   store.reset();
-  auto [again, error2] = ResultStore::Open((dir.path / "r.db").string());
-  ASSERT_TRUE(again) << error2;
-  EXPECT_TRUE(again->Has(r.id));
+  auto again = ResultStore::Open((dir.path / "r.db").string(), ResultStore::Mode::kReadOnly);
+  ASSERT_TRUE(again) << again.error();
+  EXPECT_TRUE(*(*again)->Has(r.id));
 }
 
 TEST(ResultStore, MergedShardsEqualOneStore) {
   TempDir dir;
-  auto [a, ea] = ResultStore::Open((dir.path / "a.db").string());
-  auto [b, eb] = ResultStore::Open((dir.path / "b.db").string());
-  auto [all, ec] = ResultStore::Open((dir.path / "all.db").string());
-  ASSERT_TRUE(a && b && all);
+  const std::string a = (dir.path / "a.db").string(), b = (dir.path / "b.db").string();
+  const std::string all = (dir.path / "all.db").string();
   std::vector<JobResult> results;
   for (int i = 0; i < 6; ++i) results.push_back(MakeResult("k16-beckmann-rect", 0.1 * (i + 1), i));
-  for (int i = 0; i < 6; ++i) ASSERT_EQ((i % 2 ? a : b)->Insert(results[i]), "");
-  ASSERT_EQ(a->Insert(results[1]), "");  // a duplicate row merges once
-  ASSERT_EQ(all->MergeFrom((dir.path / "a.db").string()), "");
-  ASSERT_EQ(all->MergeFrom((dir.path / "b.db").string()), "");
-  const auto rows = all->All();
+  {
+    auto sa = ResultStore::Open(a);
+    auto sb = ResultStore::Open(b);
+    ASSERT_TRUE(sa && sb);
+    for (int i = 0; i < 6; ++i) {
+      results[i].device = i % 2 ? "machine A" : "machine B";
+      ASSERT_TRUE((i % 2 ? *sa : *sb)->Insert(results[i]));
+    }
+    ASSERT_TRUE((*sa)->Insert(results[1]));  // a duplicate row merges once
+  }
+  auto merged = MergeStores({a, b}, all);
+  ASSERT_TRUE(merged) << merged.error();
+  EXPECT_EQ(*merged, 6u);
+  auto store = ResultStore::Open(all, ResultStore::Mode::kReadOnly);
+  ASSERT_TRUE(store);
+  const auto rows = *(*store)->All();
   ASSERT_EQ(rows.size(), 6u);
-  for (const JobResult& r : results) EXPECT_TRUE(all->Has(r.id));
-  EXPECT_NE(all->MergeFrom((dir.path / "missing.db").string()), "");
+  // Each row says which machine computed it.
+  for (const JobResult& r : results) {
+    auto row = std::find_if(rows.begin(), rows.end(), [&](const JobResult& x) { return x.id == r.id; });
+    ASSERT_NE(row, rows.end());
+    EXPECT_EQ(row->device, r.device);
+  }
+}
+
+// A merge is all or nothing: an input that fails after others were read
+// leaves the output as it was (here: not there at all).
+TEST(ResultStore, MergeWithABadInputChangesNothing) {
+  TempDir dir;
+  const std::string a = (dir.path / "a.db").string(), all = (dir.path / "all.db").string();
+  {
+    auto sa = ResultStore::Open(a);
+    ASSERT_TRUE(sa);
+    ASSERT_TRUE((*sa)->Insert(MakeResult("none", 0, 1)));
+  }
+  const std::string junk = (dir.path / "junk.db").string();
+  std::ofstream(junk) << "not a database";
+  for (const std::string& bad : {(dir.path / "missing.db").string(), junk}) {
+    auto merged = MergeStores({a, bad}, all);
+    ASSERT_FALSE(merged);
+    EXPECT_NE(merged.error().find(bad), std::string::npos) << merged.error();
+    EXPECT_FALSE(std::filesystem::exists(all)) << bad;
+  }
+  // And an existing output keeps exactly its rows.
+  ASSERT_TRUE(MergeStores({a}, all));
+  auto merged = MergeStores({a, junk}, all);
+  ASSERT_FALSE(merged);
+  auto store = ResultStore::Open(all, ResultStore::Mode::kReadOnly);
+  ASSERT_TRUE(store);
+  EXPECT_EQ((*store)->All()->size(), 1u);
+}
+
+// report reads a store without writing to it: no new tables, no WAL switch,
+// not even on a file the process may not write.
+TEST(ResultStore, ReadOnlyOpenLeavesTheFileUntouched) {
+  TempDir dir;
+  const std::string path = (dir.path / "r.db").string();
+  {
+    auto s = ResultStore::Open(path);
+    ASSERT_TRUE(s);
+    ASSERT_TRUE((*s)->Insert(MakeResult("none", 0, 2)));
+  }
+  std::filesystem::remove(path + "-wal");
+  std::filesystem::remove(path + "-shm");
+  std::ifstream before_in(path, std::ios::binary);
+  const std::string before((std::istreambuf_iterator<char>(before_in)), {});
+  std::filesystem::permissions(path, std::filesystem::perms::owner_read, std::filesystem::perm_options::replace);
+  {
+    auto s = ResultStore::Open(path, ResultStore::Mode::kReadOnly);
+    ASSERT_TRUE(s) << s.error();
+    EXPECT_EQ((*s)->All()->size(), 1u);
+  }
+  std::ifstream after_in(path, std::ios::binary);
+  const std::string after((std::istreambuf_iterator<char>(after_in)), {});
+  EXPECT_EQ(before, after);
+  std::filesystem::permissions(path, std::filesystem::perms::owner_all, std::filesystem::perm_options::replace);
+  EXPECT_FALSE(ResultStore::Open((dir.path / "missing.db").string(), ResultStore::Mode::kReadOnly));
+  EXPECT_FALSE(std::filesystem::exists(dir.path / "missing.db"));
+}
+
+TEST(ResultStore, SecondLockOnAStoreIsRefusedAtOnce) {
+  TempDir dir;
+  const std::string path = (dir.path / "r.db").string();
+  auto first = StoreLock::Acquire(path);
+  ASSERT_TRUE(first) << first.error();
+  auto second = StoreLock::Acquire(path);
+  ASSERT_FALSE(second);
+  EXPECT_NE(second.error().find("another shimmer process"), std::string::npos) << second.error();
+  first->reset();
+  EXPECT_TRUE(StoreLock::Acquire(path));
 }
 
 TEST(ResultStore, UnwritableLocationIsAClearError) {
-  auto [store, error] = ResultStore::Open("/proc/shimmer-no/r.db");
+  auto store = ResultStore::Open("/proc/shimmer-no/r.db");
   EXPECT_FALSE(store);
-  EXPECT_NE(error.find("/proc/shimmer-no/r.db"), std::string::npos) << error;
+  EXPECT_NE(store.error().find("/proc/shimmer-no/r.db"), std::string::npos) << store.error();
 }
 
 }  // namespace
 }  // namespace shimmer::experiments
 
-#include "report.h"
+#include "shimmer/experiments/csv.h"
+#include "shimmer/experiments/report.h"
 
 namespace shimmer::experiments {
 namespace {
+
+// An RFC 4180 reader written apart from the writer: quoted fields may hold
+// commas, doubled quotes and line breaks; records end in CRLF or LF.
+std::vector<std::vector<std::string>> ParseCsv(const std::string& text) {
+  std::vector<std::vector<std::string>> records(1);
+  std::string field;
+  bool quoted = false, field_started = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') field += '"', ++i;
+      else if (c == '"') quoted = false;
+      else field += c;
+    } else if (c == '"' && !field_started) {
+      quoted = field_started = true;
+    } else if (c == ',') {
+      records.back().push_back(field), field.clear(), field_started = false;
+    } else if (c == '\r' || c == '\n') {
+      if (c == '\r' && i + 1 < text.size() && text[i + 1] == '\n') ++i;
+      records.back().push_back(field), field.clear(), field_started = false;
+      records.emplace_back();
+    } else {
+      field += c, field_started = true;
+    }
+  }
+  if (field_started || !records.back().empty()) records.back().push_back(field);
+  if (records.back().empty()) records.pop_back();
+  return records;
+}
+
+TEST(Csv, FieldsWithCommasQuotesAndNewlinesReadBackAsWritten) {
+  const std::vector<std::string> header = {"name", "params", "note"};
+  const std::vector<std::vector<std::string>> rows = {
+      {"tk19", "{\"kappa\":0.18,\"sigma2\":0.25}", "plain"},
+      {"a,b", "say \"hi\"", "two\nlines"},
+      {"", "trailing space ", "\"\""}};
+  CsvTable table(header);
+  for (const auto& r : rows) table.AddRow(r);
+  const auto read = ParseCsv(table.Text());
+  ASSERT_EQ(read.size(), 1 + rows.size()) << table.Text();
+  EXPECT_EQ(read[0], header);
+  for (std::size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(read[i + 1], rows[i]) << i;
+  EXPECT_EQ(CsvNumber(std::nan("")), "");
+  EXPECT_THROW(table.AddRow({"short"}), std::logic_error);
+}
 
 TEST(Report, ParetoFrontKeepsOnlyUndominatedPoints) {
   // (cost, error): b dominates c; a is cheapest; d is most accurate; e ties a's cost but is worse.
@@ -107,24 +241,65 @@ TEST(Report, WritesTablesCsvAndPlotScripts) {
     rows.push_back(r);
   }
   std::vector<std::string> warnings;
-  ASSERT_EQ(WriteReport(rows, "t", (dir.path / "rep").string(), &warnings), "");
-  std::ifstream csv(dir.path / "rep" / "report.csv");
-  std::string header;
-  std::getline(csv, header);
-  EXPECT_EQ(header,
-            "scene,material,camera,variant,params,derivatives,tv_ratio,tv_err,energy_bias,temporal_diff_err,relmse,"
-            "flicker_index,ms_per_frame");
-  int lines = 0;
-  for (std::string l; std::getline(csv, l);) ++lines;
-  EXPECT_EQ(lines, 3);
+  rows[1].job.params = {{"kappa", 0.18}, {"sigma2", 0.25}};  // a JSON field with a comma and quotes
+  rows[1].metrics["region"] = "highlight";
+  rows[1].device = "gpu, \"fast\"";
+  ASSERT_TRUE(WriteReport(rows, "t", (dir.path / "rep").string(), &warnings));
+  std::ifstream csv_in(dir.path / "rep" / "report.csv", std::ios::binary);
+  const auto csv = ParseCsv(std::string((std::istreambuf_iterator<char>(csv_in)), {}));
+  ASSERT_EQ(csv.size(), 4u);
+  const std::vector<std::string> header = {"scene",  "material",     "camera",      "variant",       "params",
+                                           "derivatives", "region", "tv_ratio",   "tv_err",        "energy_bias",
+                                           "temporal_diff_err", "relmse", "flicker_index", "ms_per_frame", "device",
+                                           "driver"};
+  EXPECT_EQ(csv[0], header);
+  const std::vector<std::string>* tk19 = nullptr;
+  for (const auto& record : csv) {
+    EXPECT_EQ(record.size(), header.size());
+    if (record[3] == "tk19") tk19 = &record;
+  }
+  ASSERT_NE(tk19, nullptr);
+  EXPECT_EQ(nlohmann::json::parse((*tk19)[4]), nlohmann::json(rows[1].job.params));
+  EXPECT_EQ((*tk19)[6], "highlight");
+  EXPECT_EQ((*tk19)[14], rows[1].device);
   std::ifstream md(dir.path / "rep" / "report.md");
   std::string text((std::istreambuf_iterator<char>(md)), {});
-  EXPECT_NE(text.find("| tk19 fp_max=1 |"), std::string::npos) << text;
   EXPECT_NE(text.find("## Summary"), std::string::npos);
   EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_pareto_tv_err.gp"));
   EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_pareto_relmse.gp"));
   EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp"));
-  EXPECT_NE(WriteReport({}, "t", (dir.path / "empty").string(), &warnings), "");
+  EXPECT_NE(text.find("| tk19 kappa=0.18 sigma2=0.25 | highlight |"), std::string::npos) << text;
+  // Scripts name their outputs by the final names: rerunning one rebuilds its plot.
+  std::ifstream gp(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp");
+  std::string script((std::istreambuf_iterator<char>(gp)), {});
+  EXPECT_NE(script.find("set output 'sphere___ggx_0_02___orbit___quad_spectra.svg'"), std::string::npos) << script;
+  EXPECT_NE(script.find("noenhanced"), std::string::npos);
+  for (const auto& e : fs::directory_iterator(dir.path / "rep"))  // no staging left behind
+    EXPECT_NE(e.path().filename().string().front(), '.') << e.path();
+  EXPECT_FALSE(WriteReport({}, "t", (dir.path / "empty").string(), &warnings));
+  EXPECT_FALSE(fs::exists(dir.path / "empty"));
+}
+
+// The spectra of a group of twenty variants: twenty different line styles,
+// where gnuplot's own cycle repeats after eight.
+TEST(Report, SpectraOfManyVariantsLookDifferent) {
+  TempDir dir;
+  std::vector<JobResult> rows;
+  for (int i = 0; i < 20; ++i) {
+    JobResult r = MakeResult("k16-beckmann-rect", 0.05 * (i + 1), 2.0);
+    r.metrics["flicker"] = {{"flicker_index", 0.1}, {"freq_hz", {0.0, 7.5}}, {"psd", {1e-3, 2e-3}}};
+    rows.push_back(r);
+  }
+  std::vector<std::string> warnings;
+  ASSERT_TRUE(WriteReport(rows, "t", (dir.path / "rep").string(), &warnings));
+  std::ifstream gp(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp");
+  std::set<std::string> styles;
+  for (std::string line; std::getline(gp, line);) {
+    const auto lc = line.find("lc rgb");
+    const auto title = line.find(" title ");
+    if (lc != std::string::npos && title != std::string::npos) styles.insert(line.substr(lc, title - lc));
+  }
+  EXPECT_EQ(styles.size(), 20u);
 }
 
 }  // namespace

@@ -19,6 +19,7 @@
 namespace shimmer::metrics {
 namespace {
 
+using testing::WriteExrMats;
 using testing::Layout;
 using testing::SequenceSpec;
 using testing::TempDir;
@@ -58,7 +59,7 @@ TEST(ExrSequence, ReadsPlainRgbInNameOrder) {
 TEST(ExrSequence, LuminanceUsesRec709Weights) {
   TempDir dir;
   cv::Mat r(2, 2, CV_32F, cv::Scalar(1.0)), g(2, 2, CV_32F, cv::Scalar(2.0)), b(2, 2, CV_32F, cv::Scalar(4.0));
-  ASSERT_TRUE(WriteExr(dir / "a.exr", {{"R", r}, {"G", g}, {"B", b}}));
+  ASSERT_TRUE(WriteExrMats(dir / "a.exr", {{"R", r}, {"G", g}, {"B", b}}));
   auto frame = ReadFrame(dir / "a.exr", "beauty", 2, 2, false);
   ASSERT_TRUE(frame) << frame.error();
   EXPECT_FLOAT_EQ(frame->luminance.at<float>(1, 1), static_cast<float>(0.2126 + 2 * 0.7152 + 4 * 0.0722));
@@ -322,7 +323,7 @@ TEST(ExrSequenceErrors, MissingChannelInALaterFrame) {
   TempDir dir;
   WriteSequence(dir.path(), Ramp(Layout::kSpecularLayer, 2));
   cv::Mat v(6, 8, CV_32F, cv::Scalar(1));
-  ASSERT_TRUE(WriteExr(dir / "frame_0002.exr", {{"R", v}, {"G", v}, {"B", v}, {"specular.R", v}, {"specular.B", v}}));
+  ASSERT_TRUE(WriteExrMats(dir / "frame_0002.exr", {{"R", v}, {"G", v}, {"B", v}, {"specular.R", v}, {"specular.B", v}}));
   auto seq = OpenSequence(dir.path(), {});
   ASSERT_FALSE(seq);
   EXPECT_TRUE(Contains(seq.error(), "frame_0002.exr")) << seq.error();
@@ -347,7 +348,7 @@ TEST(ExrSequenceErrors, TruncatedFileFailsOnRead) {
   const auto file = dir / "frame_0000.exr";
   std::filesystem::resize_file(file, std::filesystem::file_size(file) * 2 / 3);
   auto seq = OpenSequence(dir.path(), {});  // the header alone is intact
-  Result<Frame> frame = seq ? ReadFrame(file, "beauty", 64, 64, false) : Result<Frame>::Failure(seq.error());
+  Result<LuminanceFrame> frame = seq ? ReadFrame(file, "beauty", 64, 64, false) : Result<LuminanceFrame>::Failure(seq.error());
   ASSERT_FALSE(frame);
   EXPECT_TRUE(Contains(frame.error(), "frame_0000.exr")) << frame.error();
 }
@@ -357,7 +358,7 @@ TEST(ReadMask, AnyImageNonzeroIsIn) {
   cv::Mat m = cv::Mat::zeros(6, 8, CV_32F);
   m.at<float>(2, 3) = 0.5f;
   m.at<float>(4, 1) = std::numeric_limits<float>::quiet_NaN();
-  ASSERT_TRUE(WriteExr(dir / "m.exr", {{"Y", m}}));
+  ASSERT_TRUE(WriteExrMats(dir / "m.exr", {{"Y", m}}));
   auto mask = ReadMask(dir / "m.exr", 8, 6);
   ASSERT_TRUE(mask) << mask.error();
   EXPECT_EQ(cv::countNonZero(*mask), 1);

@@ -12,6 +12,7 @@
 namespace shimmer::metrics {
 namespace {
 
+using testing::WriteExrMats;
 using testing::Layout;
 using testing::SequenceSpec;
 using testing::TempDir;
@@ -222,7 +223,7 @@ TEST(MetricsReport, MaskFileSelectsPixels) {
   WriteSequence(dir / "test", Spec(4, [](int t, int x, int) { return x == 0 ? 1.0f * (t % 2) : 1.0f; }));
   cv::Mat mask = cv::Mat::zeros(32, 32, CV_32F);
   mask.col(0).setTo(1.0f);
-  ASSERT_TRUE(WriteExr(dir / "mask.exr", {{"Y", mask}}));
+  ASSERT_TRUE(WriteExrMats(dir / "mask.exr", {{"Y", mask}}));
   MetricsReport r = Measure({.test = dir / "test", .mask_file = dir / "mask.exr"});
   EXPECT_EQ(r.pixels, 32);
   EXPECT_NEAR(r.tv_test, 0.25 * 4 / 3.0, 1e-9);

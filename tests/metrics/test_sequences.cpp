@@ -31,7 +31,7 @@ void WriteSequence(const std::filesystem::path& dir, const SequenceSpec& spec) {
     cv::Mat v(spec.height, spec.width, CV_32F);
     for (int y = 0; y < spec.height; ++y)
       for (int x = 0; x < spec.width; ++x) v.at<float>(y, x) = spec.value(t, x, y);
-    std::vector<ExrChannel> channels;
+    std::vector<MatChannel> channels;
     switch (spec.layout) {
       case Layout::kBeautyRgb:
         channels = {{"R", v}, {"G", v}, {"B", v}};
@@ -63,8 +63,16 @@ void WriteSequence(const std::filesystem::path& dir, const SequenceSpec& spec) {
     }
     char name[64];
     std::snprintf(name, sizeof name, "%s%04d.exr", spec.prefix.c_str(), t);
-    if (Status s = WriteExr(dir / name, channels); !s) throw std::runtime_error(s.error());
+    if (Status s = WriteExrMats(dir / name, channels); !s) throw std::runtime_error(s.error());
   }
+}
+
+Status WriteExrMats(const std::filesystem::path& file, const std::vector<MatChannel>& channels,
+                    ExrCompression compression) {
+  if (channels.empty()) return Status::Failure(file.string() + ": no channels");
+  std::vector<ExrPlane> planes;
+  for (const MatChannel& c : channels) planes.push_back(PlaneOf(c.name, c.plane, c.half));
+  return WriteExr(file, channels[0].plane.cols, channels[0].plane.rows, planes, compression);
 }
 
 }  // namespace shimmer::metrics::testing

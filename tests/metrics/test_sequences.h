@@ -8,6 +8,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "shimmer/core/exr_output.h"
+
 namespace shimmer::metrics::testing {
 
 // A fresh directory under the system temp dir, removed with everything in it.
@@ -46,5 +48,15 @@ struct SequenceSpec {
 // Writes frames <prefix>0000.exr ... into `dir` (created). Grey pixels: R = G = B =
 // value, so luminance == value exactly (the weights sum to 1).
 void WriteSequence(const std::filesystem::path& dir, const SequenceSpec& spec);
+
+// One named CV_32F plane of a test EXR.
+struct MatChannel {
+  std::string name;
+  cv::Mat plane;
+  bool half = false;
+};
+// Through shimmer::WriteExr, the one EXR writer; every plane the same size.
+Status WriteExrMats(const std::filesystem::path& file, const std::vector<MatChannel>& channels,
+                    ExrCompression compression = ExrCompression::kZip);
 
 }  // namespace shimmer::metrics::testing

@@ -14,9 +14,10 @@
 #include <fstream>
 #include <thread>
 
-#include "renderer.h"
-#include "scene.h"
-#include "shading.h"
+#include "shimmer/renderer/renderer.h"
+#include "test_hooks.h"
+#include "shimmer/renderer/scene.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::render {
 namespace {
@@ -26,7 +27,7 @@ constexpr double kPi = 3.14159265358979323846;
 RenderSettings Settings(const std::string& scene_name, const std::string& variant, shading::DerivativeSource d,
                         int size) {
   RenderSettings s;
-  s.scene = scene::LoadScene(scene_name).value;
+  s.scene = scene::LoadScene(scene_name).value();
   s.material = s.scene.material;
   s.variant = variant;
   s.derivatives = d;
@@ -37,13 +38,14 @@ RenderSettings Settings(const std::string& scene_name, const std::string& varian
 }
 
 Frame RenderOne(const RenderSettings& s, int index, std::unique_ptr<Renderer>* keep = nullptr) {
-  auto [r, error] = Renderer::Create(s);
-  EXPECT_TRUE(r) << error;
+  auto r = Renderer::Create(s);
+  EXPECT_TRUE(r) << r.error();
   if (!r) return {};
-  auto result = r->RenderFrame(index);
-  EXPECT_TRUE(result.error.empty()) << result.error;
-  if (keep) *keep = std::move(r);
-  return result.frame;
+  auto result = (*r)->RenderFrame(index);
+  EXPECT_TRUE(result) << result.error();
+  if (!result) return {};
+  if (keep) *keep = std::move(*r);
+  return std::move(*result);
 }
 
 double Luminance(glm::dvec3 c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
@@ -69,15 +71,15 @@ void ExpectMatchesOracle(const std::string& scene_name, const std::string& varia
   RenderSettings s = Settings(scene_name, variant, d, 40);
   if (!material.empty()) {
     auto parsed = scene::ParseMaterial(material, s.material);
-    ASSERT_TRUE(parsed.error.empty()) << parsed.error;
-    s.material = parsed.value;
+    ASSERT_TRUE(parsed.error().empty()) << parsed.error();
+    s.material = parsed.value();
   }
   std::unique_ptr<Renderer> r;
   const int frame_index = 3;
   Frame f = RenderOne(s, frame_index, &r);
   ASSERT_FALSE(f.planes.empty());
   const shading::VariantInfo* info = shading::FindVariant(variant);
-  auto params = shading::ResolveParams(*info, {}).values;
+  auto params = shading::ResolveParams(*info, {}).value();
   shading::CameraDesc cam = r->camera(frame_index);
   int bad = 0, total = 0, hits = 0;
   double max_spec = 0;
@@ -148,8 +150,8 @@ TEST(GpuOracle, BeckmannMaterials) {
 // height-correlated G, Schlick F) at pixel centres.
 TEST(GpuKnownAnswer, RoughGgxSphereUnderDirectionalLight) {
   RenderSettings s = Settings("sphere", "none", DerivativeSource::kAnalytic, 64);
-  s.camera = "static";
-  s.material = scene::ParseMaterial("ggx:0.3,f0=0.04,albedo=0.5", s.material).value;
+  s.camera = scene::CameraPath::kStatic;
+  s.material = scene::ParseMaterial("ggx:0.3,f0=0.04,albedo=0.5", s.material).value();
   std::unique_ptr<Renderer> r;
   Frame f = RenderOne(s, 0, &r);
   ASSERT_FALSE(f.planes.empty());
@@ -222,7 +224,7 @@ TEST(GpuReference, StandardErrorShrinksLikeInverseSqrtSpp) {
 // sub-pixel spheres).
 TEST(GpuReference, MeanAgreesWithMuchHigherSppWithinStandardErrors) {
   RenderSettings s = Settings("sphere", "none", DerivativeSource::kAnalytic, 32);
-  s.material = scene::ParseMaterial("ggx:0.1", s.material).value;
+  s.material = scene::ParseMaterial("ggx:0.1", s.material).value();
   s.reference_spp = 5;  // odd: the kernel takes samples in pairs, this checks the last single one
   Frame lo = RenderOne(s, 2);
   EXPECT_EQ(lo.at(kSampleCount, 5, 5), 25.0f);
@@ -268,11 +270,15 @@ TEST(GpuSequence, WritesExrLayersAndSequenceJson) {
   RenderSettings s = Settings("wires", "tk19", DerivativeSource::kQuadFine, 24);
   s.frames = 3;
   s.reference_spp = 0;
-  std::string error = RenderSequence(s, dir.string(), nullptr);
-  ASSERT_TRUE(error.empty()) << error;
+  auto summary = RenderSequence(s, dir.string(), nullptr);
+  ASSERT_TRUE(summary) << summary.error();
+  EXPECT_EQ(summary->frames.size(), 3u);
+  EXPECT_FALSE(summary->device.empty());
   std::ifstream in(dir / "sequence.json");
   auto seq = nlohmann::json::parse(in);
   EXPECT_EQ(seq["status"], "complete");
+  EXPECT_EQ(seq["device"], summary->device);
+  EXPECT_EQ(seq["driver"], summary->driver);
   EXPECT_EQ(seq["scene"], "wires");
   EXPECT_EQ(seq["variant"], "tk19");
   EXPECT_EQ(seq["frames"].size(), 3u);
@@ -324,7 +330,7 @@ TEST(GpuRender, BandsOfRowsGiveTheFrameOfOneDispatch) {
     s.max_rounds = 4;
     Frame whole = RenderOne(s, 3);
     for (int rows : {8, 16}) {
-      s.band_rows = rows;
+      testing::ScopedTestHooks hooks({.band_rows = rows});
       Frame banded = RenderOne(s, 3);
       ASSERT_EQ(banded.planes.size(), whole.planes.size());
       EXPECT_EQ(banded.rounds, whole.rounds);
@@ -365,27 +371,28 @@ TEST(GpuRender, RenderersSharingAPipelineKeepTheirOwnParameters) {
   RenderSettings b = a;
   b.param_overrides = {{"fp_max", 1.0}};
   b.material.alpha = {0.2, 0.2};
-  auto [ra, ea] = Renderer::Create(a);
-  ASSERT_TRUE(ra) << ea;
-  auto [rb, eb] = Renderer::Create(b);
-  ASSERT_TRUE(rb) << eb;
-  EXPECT_EQ(rb->timings().pipeline_ms, 0.0);  // compiled once, for `a` (or an earlier test)
-  const Frame a1 = ra->RenderFrame(2).frame, b1 = rb->RenderFrame(2).frame;
+  auto created_a = Renderer::Create(a);
+  ASSERT_TRUE(created_a) << created_a.error();
+  auto created_b = Renderer::Create(b);
+  ASSERT_TRUE(created_b) << created_b.error();
+  Renderer& ra = **created_a;
+  Renderer& rb = **created_b;
+  EXPECT_EQ(rb.timings().pipeline_ms, 0.0);  // compiled once, for `a` (or an earlier test)
+  const Frame a1 = *ra.RenderFrame(2), b1 = *rb.RenderFrame(2);
   auto same = [](const Frame& x, const Frame& y) {
     return x.planes.size() == y.planes.size() &&
            std::memcmp(x.planes.data(), y.planes.data(), x.planes.size() * sizeof(float)) == 0;
   };
   EXPECT_FALSE(same(a1, b1));
   Frame a2, b2;
-  std::thread other([&] { b2 = rb->RenderFrame(2).frame; });
-  a2 = ra->RenderFrame(2).frame;
+  std::thread other([&] { b2 = *rb.RenderFrame(2); });
+  a2 = *ra.RenderFrame(2);
   other.join();
   EXPECT_TRUE(same(a1, a2));
   EXPECT_TRUE(same(b1, b2));
   // And as a renderer alone in a fresh process would (its own device).
-  RenderSettings lone = b;
-  lone.lose_device_after_dispatches = 1000;  // a private device and pipeline
-  EXPECT_TRUE(same(b1, RenderOne(lone, 2)));
+  testing::ScopedTestHooks hooks({.lose_device_after_dispatches = 1000});  // a private device and pipeline
+  EXPECT_TRUE(same(b1, RenderOne(b, 2)));
 }
 
 // A device lost mid-sequence (injected: lavapipe never loses its device)
@@ -397,8 +404,11 @@ TEST(GpuSequence, DeviceLostMidSequenceLeavesOnlyWholeFrames) {
   fs::remove_all(dir);
   RenderSettings s = Settings("sphere", "none", DerivativeSource::kQuadFine, 24);
   s.frames = 5;
-  s.lose_device_after_dispatches = 3;  // the warm-up dispatch, frames 0 and 1; frame 2 is lost
-  std::string error = RenderSequence(s, dir.string(), nullptr);
+  testing::ScopedTestHooks hooks({.lose_device_after_dispatches = 3});  // warm-up, frames 0 and 1; 2 is lost
+  auto rendered = RenderSequence(s, dir.string(), nullptr);
+  ASSERT_FALSE(rendered);
+  EXPECT_EQ(rendered.code(), ErrorCode::kDeviceLost);
+  const std::string error = rendered.error();
   EXPECT_EQ(error, "frame 2: the GPU dispatch failed: device lost");
   std::ifstream in(dir / "sequence.json");
   auto seq = nlohmann::json::parse(in);
@@ -425,12 +435,12 @@ TEST(GpuValidation, EveryKernelKindRendersWithoutLayerMessages) {
     RenderSettings s = k.Settings(24);
     s.max_rounds = 3;
     s.validation = true;
-    auto [r, error] = Renderer::Create(s);
-    ASSERT_TRUE(r) << error;
-    if (!r->validation_active()) GTEST_SKIP() << "VK_LAYER_KHRONOS_validation is not installed";
+    auto r = Renderer::Create(s);
+    ASSERT_TRUE(r) << r.error();
+    if (!(*r)->validation_active()) GTEST_SKIP() << "VK_LAYER_KHRONOS_validation is not installed";
     for (int frame = 0; frame < 2; ++frame) {
-      Renderer::Result result = r->RenderFrame(frame);
-      EXPECT_EQ(result.error, "");
+      auto result = (*r)->RenderFrame(frame);
+      EXPECT_TRUE(result) << result.error();
     }
   }
 }
@@ -438,7 +448,7 @@ TEST(GpuValidation, EveryKernelKindRendersWithoutLayerMessages) {
 // Motion vectors point to where the surface point was in the previous frame.
 TEST(GpuSequence, MotionVectorsReprojectToThePreviousFrame) {
   RenderSettings s = Settings("sphere", "none", DerivativeSource::kAnalytic, 48);
-  s.camera = "pan";
+  s.camera = scene::CameraPath::kPan;
   std::unique_ptr<Renderer> r;
   Frame f = RenderOne(s, 10, &r);
   ASSERT_FALSE(f.planes.empty());

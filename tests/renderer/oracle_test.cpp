@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "scene.h"
-#include "shading.h"
+#include "shimmer/renderer/scene.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer {
 namespace {
@@ -29,10 +29,10 @@ double BruteForceDistance(const scene::Scene& s, glm::dvec3 o, glm::dvec3 d) {
 }
 
 TEST(Oracle, BvhTraceMatchesBruteForce) {
-  scene::Scene s = scene::LoadScene("sphere-field").value;
+  scene::Scene s = scene::LoadScene("sphere-field").value();
   auto words = scene::PackScene(s);
   const int size = 48;
-  shading::CameraDesc cam = scene::CameraAt("orbit", s.rig, 3, 30, size, size);
+  shading::CameraDesc cam = scene::CameraAt(scene::CameraPath::kOrbit, s.rig, 3, 30, size, size);
   int hits = 0;
   for (int y = 0; y < size; y += 1)
     for (int x = 0; x < size; x += 1) {
@@ -60,12 +60,12 @@ TEST(Oracle, BvhTraceMatchesBruteForce) {
 TEST(Oracle, PixelCandidatesGiveTheBvhHitForEveryRayInThePixel) {
   const glm::dvec2 offsets[] = {{0, 0}, {1, 0}, {0, 1}, {1, 1}, {0.5, 0.5}, {0.13, 0.91}, {0.77, 0.29}, {0.999, 0.001}};
   for (const char* name : {"sphere", "sphere-field", "wires", "bumpy-plane"}) {
-    scene::Scene s = scene::LoadScene(name).value;
+    scene::Scene s = scene::LoadScene(name).value();
     auto words = scene::PackScene(s);
     const int features = scene::SceneFeatures(s);
     int pixels = 0, overflow = 0, rays = 0, hits = 0;
     for (int frame : {0, 7, 19}) {
-      shading::CameraDesc cam = scene::CameraAt(frame == 7 ? "dolly" : "orbit", s.rig, frame, 30, 96, 72);
+      shading::CameraDesc cam = scene::CameraAt(frame == 7 ? scene::CameraPath::kDolly : scene::CameraPath::kOrbit, s.rig, frame, 30, 96, 72);
       for (int y = 0; y < cam.height; ++y)
         for (int x = 0; x < cam.width; ++x) {
           ++pixels;
@@ -90,10 +90,10 @@ TEST(Oracle, PixelCandidatesGiveTheBvhHitForEveryRayInThePixel) {
 // On a large smooth sphere the ray-differential derivatives equal the quad
 // differences to first order (the difference is a half-pixel offset times curvature).
 TEST(Oracle, AnalyticDerivativesAgreeWithQuadDifferencesOnSmoothSurface) {
-  scene::Scene s = scene::LoadScene("sphere").value;
+  scene::Scene s = scene::LoadScene("sphere").value();
   auto words = scene::PackScene(s);
   const int size = 512;
-  shading::CameraDesc cam = scene::CameraAt("static", s.rig, 0, 30, size, size);
+  shading::CameraDesc cam = scene::CameraAt(scene::CameraPath::kStatic, s.rig, 0, 30, size, size);
   int checked = 0;
   for (glm::ivec2 px : {glm::ivec2(256, 256), glm::ivec2(230, 280), glm::ivec2(300, 220), glm::ivec2(200, 200)}) {
     auto a = shading::ShadePixel(words, cam, s.light, s.material, 0, shading::DerivativeSource::kAnalytic, {}, px);
@@ -119,13 +119,13 @@ TEST(Oracle, AnalyticDerivativesAgreeWithQuadDifferencesOnSmoothSurface) {
 
 TEST(Oracle, EveryVariantGivesFiniteOutputAtSilhouettesAndGrazing) {
   for (const char* name : {"sphere", "wires", "bumpy-plane"}) {
-    scene::Scene s = scene::LoadScene(name).value;
+    scene::Scene s = scene::LoadScene(name).value();
     auto words = scene::PackScene(s);
-    shading::CameraDesc cam = scene::CameraAt("orbit", s.rig, 5, 30, 24, 24);
+    shading::CameraDesc cam = scene::CameraAt(scene::CameraPath::kOrbit, s.rig, 5, 30, 24, 24);
     for (const auto& v : shading::Variants())
       for (auto d : {shading::DerivativeSource::kAnalytic, shading::DerivativeSource::kQuadFine,
                      shading::DerivativeSource::kQuadCoarse}) {
-        auto p = shading::ResolveParams(v, {}).values;
+        auto p = shading::ResolveParams(v, {}).value();
         for (int y = 0; y < 24; ++y)
           for (int x = 0; x < 24; ++x) {
             auto r = shading::ShadePixel(words, cam, s.light, s.material, v.id, d, p, {x, y});

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "scene.h"
+#include "shimmer/renderer/scene.h"
 
 namespace shimmer::scene {
 namespace {
@@ -11,19 +11,19 @@ namespace {
 TEST(Material, ParsesIsotropicAnisotropicAndColours) {
   shading::MaterialDesc base;
   auto m = ParseMaterial("ggx:0.05", base);
-  ASSERT_TRUE(m.ok()) << m.error;
-  EXPECT_EQ(m.value.ndf, shading::Ndf::kGgx);
-  EXPECT_DOUBLE_EQ(m.value.alpha.x, 0.05);
-  EXPECT_DOUBLE_EQ(m.value.alpha.y, 0.05);
+  ASSERT_TRUE(m.ok()) << m.error();
+  EXPECT_EQ(m->ndf, shading::Ndf::kGgx);
+  EXPECT_DOUBLE_EQ(m->alpha.x, 0.05);
+  EXPECT_DOUBLE_EQ(m->alpha.y, 0.05);
   auto a = ParseMaterial("beckmann:0.02,0.1,f0=0.9/0.6/0.3,albedo=0", base);
-  ASSERT_TRUE(a.ok()) << a.error;
-  EXPECT_EQ(a.value.ndf, shading::Ndf::kBeckmann);
-  EXPECT_DOUBLE_EQ(a.value.alpha.y, 0.1);
-  EXPECT_DOUBLE_EQ(a.value.f0.y, 0.6);
-  EXPECT_DOUBLE_EQ(a.value.albedo.z, 0.0);
-  auto round_trip = ParseMaterial(MaterialSpec(a.value), base);
-  ASSERT_TRUE(round_trip.ok()) << round_trip.error;
-  EXPECT_DOUBLE_EQ(round_trip.value.f0.x, 0.9);
+  ASSERT_TRUE(a.ok()) << a.error();
+  EXPECT_EQ(a->ndf, shading::Ndf::kBeckmann);
+  EXPECT_DOUBLE_EQ(a->alpha.y, 0.1);
+  EXPECT_DOUBLE_EQ(a->f0.y, 0.6);
+  EXPECT_DOUBLE_EQ(a->albedo.z, 0.0);
+  auto round_trip = ParseMaterial(MaterialSpec(a.value()), base);
+  ASSERT_TRUE(round_trip.ok()) << round_trip.error();
+  EXPECT_DOUBLE_EQ(round_trip->f0.x, 0.9);
 }
 
 TEST(Material, RejectsBadSpecsWithAMessage) {
@@ -32,7 +32,7 @@ TEST(Material, RejectsBadSpecsWithAMessage) {
                           "ggx:0.1,gloss=1", "ggx:0.1,albedo=1/2", "ggx:"}) {
     auto m = ParseMaterial(bad, base);
     EXPECT_FALSE(m.ok()) << bad;
-    EXPECT_NE(m.error.find("material"), std::string::npos) << m.error;
+    EXPECT_NE(m.error().find("material"), std::string::npos) << m.error();
   }
 }
 
@@ -44,13 +44,13 @@ TEST(SceneJson, LoadsPrimitivesLightMaterialCamera) {
     "light": {"type": "sphere", "center": [0, 5, 0], "intensity": [10, 10, 10], "radius": 0.1},
     "material": "beckmann:0.2", "camera": {"distance": 7, "fov_y_deg": 20}})",
                           "test.json");
-  ASSERT_TRUE(s.ok()) << s.error;
-  EXPECT_EQ(s.value.name, "two");
-  ASSERT_EQ(s.value.primitives.size(), 3u);
-  EXPECT_EQ(s.value.primitives[1].type, Primitive::Type::kCapsule);
-  EXPECT_EQ(s.value.light.type, shading::LightType::kSphere);
-  EXPECT_EQ(s.value.material.ndf, shading::Ndf::kBeckmann);
-  EXPECT_DOUBLE_EQ(s.value.rig.distance, 7);
+  ASSERT_TRUE(s.ok()) << s.error();
+  EXPECT_EQ(s->name, "two");
+  ASSERT_EQ(s->primitives.size(), 3u);
+  EXPECT_EQ(s->primitives[1].type, Primitive::Type::kCapsule);
+  EXPECT_EQ(s->light.type, shading::LightType::kSphere);
+  EXPECT_EQ(s->material.ndf, shading::Ndf::kBeckmann);
+  EXPECT_DOUBLE_EQ(s->rig.distance, 7);
 }
 
 TEST(SceneJson, ErrorsNameTheSourceAndField) {
@@ -60,60 +60,76 @@ TEST(SceneJson, ErrorsNameTheSourceAndField) {
   };
   for (const Case& c : {Case{"{", "not valid JSON"}, Case{"{}", "'primitives'"},
                         Case{R"({"primitives": [{"type": "cube"}]})", "unknown type 'cube'"},
-                        Case{R"({"primitives": [{"type": "sphere", "radius": -1}]})", "'radius'"},
+                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radius": -1}]})",
+                             "primitives[0]: 'radius' must be a number > 0"},
+                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radius": 0}]})", "> 0"},
                         Case{R"({"primitives": [{"type": "sphere", "center": [0, 0]}]})", "'center'"},
+                        Case{R"({"primitives": [{"type": "sphere", "radius": 1}]})", "'center' is required"},
+                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radus": 1}]})",
+                             "unknown key 'radus'"},
+                        Case{R"({"primitives": [{"type": "sphere", "center": [1e300, 0, 0]}]})", "'center' must be finite"},
+                        Case{R"({"name": 5, "primitives": [{"type": "sphere", "center": [0,0,0]}]})",
+                             "'name' must be a string"},
+                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,1e999]}]})", "bad.json:1:"},
                         Case{R"({"primitives": [{"type": "capsule", "a": [0,0,0], "b": [0,0,0]}]})", "coincide"},
-                        Case{R"({"primitives": [{"type": "sphere"}], "light": {"type": "area"}})", "light"},
-                        Case{R"({"primitives": [{"type": "sphere"}], "material": "ggx:7"})", "material"}}) {
+                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0]}], "light": {"type": "area"}})",
+                             "light"},
+                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0]}], "light": {"type": 3}})",
+                             "light: 'type' must be a string"},
+                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0]}], "material": "ggx:7"})",
+                             "material"}}) {
     auto s = ParseSceneJson(c.json, "bad.json");
     EXPECT_FALSE(s.ok()) << c.json;
-    EXPECT_NE(s.error.find("bad.json"), std::string::npos) << s.error;
-    EXPECT_NE(s.error.find(c.expect), std::string::npos) << s.error;
+    EXPECT_NE(s.error().find("bad.json"), std::string::npos) << s.error();
+    EXPECT_NE(s.error().find(c.expect), std::string::npos) << s.error();
   }
 }
 
 TEST(SceneLoad, BuiltinsAndUnknownNames) {
   for (auto name : BuiltinSceneNames()) {
     auto s = LoadScene(std::string(name));
-    ASSERT_TRUE(s.ok()) << name << ": " << s.error;
-    EXPECT_FALSE(s.value.primitives.empty());
+    ASSERT_TRUE(s.ok()) << name << ": " << s.error();
+    EXPECT_FALSE(s->primitives.empty());
   }
   auto bad = LoadScene("no-such-scene");
   EXPECT_FALSE(bad.ok());
-  EXPECT_NE(bad.error.find("unknown scene 'no-such-scene'"), std::string::npos) << bad.error;
+  EXPECT_NE(bad.error().find("unknown scene 'no-such-scene'"), std::string::npos) << bad.error();
 }
 
 TEST(CameraPath, DeterministicMovingAndOrthonormal) {
   CameraRig rig;
-  for (auto path : CameraPathNames()) {
-    auto a = CameraAt(path, rig, 7, 30, 64, 48);
-    auto b = CameraAt(path, rig, 7, 30, 64, 48);
+  for (auto name : CameraPathNames()) {
+    const std::string_view path = name;
+    const CameraPath camera = *ParseCameraPath(name);
+    EXPECT_EQ(CameraPathName(camera), name);
+    auto a = CameraAt(camera, rig, 7, 30, 64, 48);
+    auto b = CameraAt(camera, rig, 7, 30, 64, 48);
     EXPECT_EQ(a.pos, b.pos) << path;
     EXPECT_EQ(a.fwd, b.fwd) << path;
     EXPECT_NEAR(glm::length(a.fwd), 1, 1e-12);
     EXPECT_NEAR(glm::dot(a.fwd, a.right), 0, 1e-12);
     EXPECT_NEAR(glm::dot(a.up, a.right), 0, 1e-12);
-    auto c = CameraAt(path, rig, 8, 30, 64, 48);
+    auto c = CameraAt(camera, rig, 8, 30, 64, 48);
     if (path != "static") {
       EXPECT_GT(glm::length(c.pos - a.pos), 0.0) << path;
     }
   }
   // vr-jitter stays within a few millimetres per metre of viewing distance.
-  auto base = CameraAt("static", rig, 0, 30, 64, 64);
+  auto base = CameraAt(scene::CameraPath::kStatic, rig, 0, 30, 64, 64);
   for (int f = 0; f < 90; ++f)
-    EXPECT_LT(glm::length(CameraAt("vr-jitter", rig, f, 90, 64, 64).pos - base.pos), 0.01 * rig.distance);
+    EXPECT_LT(glm::length(CameraAt(scene::CameraPath::kVrJitter, rig, f, 90, 64, 64).pos - base.pos), 0.01 * rig.distance);
   // dolly halves the distance every 2 s.
-  auto d = CameraAt("dolly", rig, 60, 30, 64, 64);
+  auto d = CameraAt(scene::CameraPath::kDolly, rig, 60, 30, 64, 64);
   EXPECT_NEAR(glm::length(d.pos - rig.target), rig.distance / 2, 1e-9);
   // orbit keeps the distance and turns 45 degrees per second.
-  auto o = CameraAt("orbit", rig, 30, 30, 64, 64);
+  auto o = CameraAt(scene::CameraPath::kOrbit, rig, 30, 30, 64, 64);
   EXPECT_NEAR(glm::length(o.pos - rig.target), rig.distance, 1e-9);
   EXPECT_NEAR(std::acos(glm::dot(glm::normalize(o.pos), glm::normalize(base.pos))) * 180 / 3.14159265358979,
               45 * std::cos(rig.elevation_deg * 3.14159265358979 / 180) * 1.0, 1.0);
 }
 
 TEST(PackScene, HeaderCountsAndBvhBounds) {
-  auto s = LoadScene("sphere-field").value;
+  auto s = LoadScene("sphere-field").value();
   auto words = PackScene(s);
   int bounded = int(words[0].x), nodes = int(words[0].y), first = int(words[0].z), unbounded = int(words[0].w);
   EXPECT_EQ(bounded + unbounded, int(s.primitives.size()));

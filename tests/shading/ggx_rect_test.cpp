@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "quadrature.h"
-#include "shading.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::shading {
 namespace {

@@ -2,7 +2,7 @@
 // name the file and line.
 #include <gtest/gtest.h>
 
-#include "shading.h"
+#include "shimmer/renderer/shading.h"
 #include "spirv_compiler.h"
 
 namespace shimmer::shading {
@@ -47,35 +47,35 @@ TEST(GlslCompile, EveryCoreFileCompilesToSpirv) {
       if (dep == name) break;
     }
     body += "layout(local_size_x = 1) in;\nvoid main() {}\n";
-    SpirvResult r = CompileCompute({"check_" + std::string(name) + ".comp", body});
-    EXPECT_TRUE(r.ok()) << name << ":\n" << r.error;
+    auto r = CompileCompute({"check_" + std::string(name) + ".comp", body});
+    EXPECT_TRUE(r.ok()) << name << ":\n" << r.error();
     ++compiled;
   }
   EXPECT_GE(compiled, 4);
 }
 
 TEST(GlslCompile, KernelCallingEveryVariantCompiles) {
-  SpirvResult r = CompileCompute({"every_variant.comp", kEveryVariantKernel});
-  ASSERT_TRUE(r.ok()) << r.error;
-  ASSERT_GT(r.words.size(), 100u);
-  EXPECT_EQ(r.words[0], 0x07230203u);  // SPIR-V magic
+  auto r = CompileCompute({"every_variant.comp", kEveryVariantKernel});
+  ASSERT_TRUE(r.ok()) << r.error();
+  ASSERT_GT(r->size(), 100u);
+  EXPECT_EQ((*r)[0], 0x07230203u);  // SPIR-V magic
 }
 
 TEST(GlslCompile, ErrorNamesFileAndLine) {
   GlslFile user{"my_variant.glsl", "real myVariant(real x) {\n  return x +;\n}\n"};
   std::string main = "#version 460\n#extension GL_GOOGLE_include_directive : require\n#define real float\n"
                      "#include \"my_variant.glsl\"\nlayout(local_size_x = 1) in;\nvoid main() {}\n";
-  SpirvResult r = CompileCompute({"kernel.comp", main}, std::span<const GlslFile>(&user, 1));
+  auto r = CompileCompute({"kernel.comp", main}, std::span<const GlslFile>(&user, 1));
   ASSERT_FALSE(r.ok());
-  EXPECT_NE(r.error.find("my_variant.glsl:2"), std::string::npos) << r.error;
+  EXPECT_NE(r.error().find("my_variant.glsl:2"), std::string::npos) << r.error();
 }
 
 TEST(GlslCompile, MissingIncludeIsAnError) {
   std::string main = "#version 460\n#extension GL_GOOGLE_include_directive : require\n"
                      "#include \"nowhere.glsl\"\nlayout(local_size_x = 1) in;\nvoid main() {}\n";
-  SpirvResult r = CompileCompute({"kernel.comp", main});
+  auto r = CompileCompute({"kernel.comp", main});
   ASSERT_FALSE(r.ok());
-  EXPECT_NE(r.error.find("nowhere.glsl"), std::string::npos) << r.error;
+  EXPECT_NE(r.error().find("nowhere.glsl"), std::string::npos) << r.error();
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "shading.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::shading {
 TEST(Catalogue, IdsMatchGlslConstants) { EXPECT_TRUE(CatalogueMatchesGlsl()); }

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "quadrature.h"
-#include "shading.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::shading {
 namespace {
@@ -33,7 +33,7 @@ Footprint<T> MakeFootprint(glm::vec<2, T> hpp, double fx, double fy, double skew
 
 template <class T>
 Params<T> DefaultParams(const VariantInfo& v) {
-  Params<double> d = ResolveParams(v, {}).values;
+  Params<double> d = ResolveParams(v, {}).value();
   return {T(d.fp_max), T(d.fp_min_cap), T(d.sigma2), T(d.kappa)};
 }
 

@@ -12,7 +12,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "shimmer/metrics/result.h"
+#include "shimmer/core/exr_output.h"
+#include "shimmer/core/result.h"
 
 namespace shimmer::metrics {
 
@@ -43,31 +44,21 @@ struct ExrSequence {
 // frame is reported before any computing starts.
 Result<ExrSequence> OpenSequence(const std::filesystem::path& path, const SequenceRequest& request);
 
-// Layers in one EXR file that carry luminance (R,G,B or Y).
-Result<std::vector<std::string>> ListLayers(const std::filesystem::path& file);
-
-struct Frame {
+struct LuminanceFrame {
   cv::Mat luminance;  // CV_32F, height x width, linear
   cv::Mat motion;     // CV_32FC2 (x, y) in pixels towards the previous frame; empty if not read
 };
 
 // Reads one frame's luminance of `layer` (and motion.X/Y when asked).
-Result<Frame> ReadFrame(const std::filesystem::path& file, const std::string& layer, int width, int height,
+Result<LuminanceFrame> ReadFrame(const std::filesystem::path& file, const std::string& layer, int width, int height,
                         bool with_motion);
 
 // Any single-channel image used as a mask (EXR or anything OpenCV reads):
 // nonzero = inside. Returned as CV_8U 0/1.
 Result<cv::Mat> ReadMask(const std::filesystem::path& file, int width, int height);
 
-// Writing: one named channel per CV_32F plane, single part, scanlines.
-struct ExrChannel {
-  std::string name;  // e.g. "R", "specular.G", "motion.X", "Y"
-  cv::Mat plane;     // CV_32F
-  bool half = false;
-};
-enum class ExrCompression { kNone, kZip };
-// Written to a temporary name and renamed.
-Status WriteExr(const std::filesystem::path& file, const std::vector<ExrChannel>& channels,
-                ExrCompression compression = ExrCompression::kZip);
+// A continuous CV_32F plane as a channel for shimmer::WriteExr (the one EXR
+// writer, shimmer/core/exr_output.h); the plane must outlive the write.
+ExrPlane PlaneOf(std::string name, const cv::Mat& plane, bool half = false);
 
 }  // namespace shimmer::metrics

@@ -7,7 +7,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "shimmer/metrics/result.h"
+#include "shimmer/core/result.h"
 
 namespace shimmer::metrics {
 

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "shimmer/metrics/exr_sequence.h"
-#include "shimmer/metrics/result.h"
+#include "shimmer/core/result.h"
 
 namespace shimmer::metrics {
 

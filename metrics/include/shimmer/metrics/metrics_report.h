@@ -15,7 +15,7 @@
 
 #include "shimmer/metrics/exr_sequence.h"
 #include "shimmer/metrics/highlight_mask.h"
-#include "shimmer/metrics/result.h"
+#include "shimmer/core/result.h"
 
 namespace shimmer::metrics {
 

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "shimmer/metrics/metrics_report.h"
-#include "shimmer/metrics/result.h"
+#include "shimmer/core/result.h"
 
 namespace shimmer::metrics {
 

@@ -9,7 +9,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "shimmer/metrics/heatmap.h"
-#include "shimmer/metrics/result.h"
+#include "shimmer/core/result.h"
 
 namespace shimmer::metrics {
 

@@ -8,6 +8,8 @@
 #include <string_view>
 #include <vector>
 
+#include "shimmer/core/result.h"
+
 namespace shimmer::experiments {
 
 struct VariantSweep {
@@ -69,14 +71,15 @@ struct Spec {
   std::vector<FitConfig> fits;  // the `fit` section: one object or a list
 };
 
-struct SpecResult {
-  Spec spec;
-  std::string error;  // "<source>:<line>: <key>: <problem>", empty when fine
-  bool ok() const { return error.empty(); }
-};
+// Bounds on what a spec may ask for (each is named in the error).
+inline constexpr int kMaxJobs = 100000;
+inline constexpr int kMaxSweepPoints = 64;
+inline constexpr int kMaxRangeSteps = 10000;
+inline constexpr int kMaxSpecFrames = 4096;
 
-// `source` names the text in messages (usually the file name).
-SpecResult ParseSpec(std::string_view json_text, const std::string& source);
-SpecResult LoadSpec(const std::string& path);
+// `source` names the text in messages (usually the file name); errors read
+// "<source>:<line>: <key>: <problem>".
+Result<Spec> ParseSpec(std::string_view json_text, const std::string& source);
+Result<Spec> LoadSpec(const std::string& path);
 
 }  // namespace shimmer::experiments

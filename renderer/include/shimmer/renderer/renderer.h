@@ -1,6 +1,7 @@
 // Renders camera-motion sequences with the Vulkan kernel: one dispatch per
-// frame (one per round for the adaptive reference), frames read back as
-// planar float channels, written as multi-layer EXR beside a sequence.json.
+// frame (per band of rows for images larger than a storage buffer, per round
+// for the adaptive reference), frames read back as planar float channels,
+// written as multi-layer EXR beside a sequence.json.
 #pragma once
 
 #include <functional>
@@ -10,12 +11,15 @@
 #include <utility>
 #include <vector>
 
-#include "scene.h"
-#include "shading.h"
+#include "shimmer/core/result.h"
+#include "shimmer/core/sequence_file.h"
+#include "shimmer/renderer/scene.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::render {
 
-// Planes of a frame, in the kernel's order (render.comp CH_*).
+// Planes of a frame, in the kernel's order (channels.glsl CH_*; gpu_layout.h
+// asserts that they agree).
 enum Channel : int {
   kBeautyR = 0,
   kSpecularR = 3,
@@ -31,12 +35,12 @@ enum Channel : int {
   kChannelCount = 21,
 };
 
-struct ExrChannel {
-  const char* name;
-  int plane;
+struct FrameChannel {
+  const char* name;  // the EXR channel name, e.g. "specular.R"
+  int plane;         // a Channel
 };
-// The EXR layers of DESIGN.md; stderr.Y only for the reference.
-std::vector<ExrChannel> ExrChannels(bool with_stderr);
+// The EXR channels of a frame file; stderr.Y only for the reference.
+std::vector<FrameChannel> FrameChannels(bool with_stderr);
 
 #ifdef NDEBUG
 inline constexpr bool kValidationByDefault = false;
@@ -47,7 +51,7 @@ inline constexpr bool kValidationByDefault = true;
 struct RenderSettings {
   scene::Scene scene;
   shading::MaterialDesc material;
-  std::string camera = "orbit";
+  scene::CameraPath camera = scene::CameraPath::kOrbit;
   double fps = 30;
   int width = 96;
   int height = 96;
@@ -64,15 +68,16 @@ struct RenderSettings {
   // Khronos validation layer (when installed); anything it reports fails the
   // render. On by default in debug builds.
   bool validation = kValidationByDefault;
-  int lose_device_after_dispatches = -1;  // fault injection for tests, see vk::ContextOptions
-  // Rows per dispatch (a multiple of 8). 0: as many as the device's storage
-  // buffer range allows (lavapipe: 128 MiB, about 1.6 M pixels of all the
-  // layers); taller images render in bands of that many rows.
-  int band_rows = 0;
   // ZIP for frames people keep; none for frames measured once and deleted
   // (the experiment runner's): zlib then costs more than the rendering.
   bool compress_exr = true;
 };
+
+// Limits of RenderSettings, checked before anything is allocated.
+inline constexpr int kMaxImageSide = 16384;
+inline constexpr int kMaxFrames = 100000;
+inline constexpr int kMaxReferenceSpp = 64;  // N of N x N
+inline constexpr int kMaxRounds = 4096;
 
 // Luminance floor of the adaptive reference's relative error (dark pixels
 // would otherwise never converge).
@@ -107,23 +112,25 @@ struct ResolvedVariant {
   std::vector<std::pair<std::string, double>> shown_params;  // the variant's own parameters with values
 };
 
+// Checks every field of `settings` that needs no device, the variant and its
+// parameters included; the error names the field ("width", "reference_spp",
+// a parameter), as RenderSettings spells it.
+Status ValidateSettings(const RenderSettings& settings);
+
 class Renderer {
  public:
   // Validates settings, opens the device, compiles the kernel. On failure the
   // error names the cause (no device, unknown variant, compile error with file:line, ...).
-  static std::pair<std::unique_ptr<Renderer>, std::string> Create(const RenderSettings& settings);
+  static Result<std::unique_ptr<Renderer>> Create(const RenderSettings& settings);
   ~Renderer();
 
-  struct Result {
-    Frame frame;
-    std::string error;
-  };
-  Result RenderFrame(int index);
+  Result<Frame> RenderFrame(int index);
 
   const RenderSettings& settings() const;
   const ResolvedVariant& variant() const;
   const Timings& timings() const;
   std::string device_name() const;
+  std::string device_driver() const;
   bool validation_active() const;  // the validation layer was asked for and is loaded
   std::span<const glm::vec4> scene_words() const;
   shading::CameraDesc camera(int frame) const;
@@ -134,23 +141,32 @@ class Renderer {
   std::unique_ptr<Impl> impl_;
 };
 
+struct DeviceDescription {
+  std::string name, driver;
+  std::string type;  // "discrete", "integrated", "virtual", "cpu", "other"
+  std::uint32_t subgroup_size = 0;
+  bool quad_ops = false;  // subgroup quad operations in compute: quad derivatives work
+};
+// Every Vulkan 1.2 device with a compute queue.
+Result<std::vector<DeviceDescription>> ListDevices();
+
 // The source revision compiled in (git describe at configure time).
 std::string SourceRevision();
 
 // Renders settings.frames frames into out_dir (frame_NNNN.exr + sequence.json),
 // writing EXR on a worker thread while the next frame renders. sequence.json
-// says "status": "running" until every frame is on disk, then "complete"; a
-// frame that fails to render (device lost, a validation message) makes it
-// "failed" with the "error", the frames before it left whole.
-// Returns an error message, empty on success. `progress(done, total)` after each frame.
-std::string RenderSequence(const RenderSettings& settings, const std::string& out_dir,
-                           const std::function<void(int, int)>& progress);
+// says "status": "running" until every frame is on disk, then "complete"; any
+// failure after it was first written (a frame that fails to render, a write
+// error, the preview) makes it "failed" with the "error", the frames before
+// it left whole. Returns what sequence.json says. `progress(done, total)`
+// after each frame.
+Result<SequenceFile> RenderSequence(const RenderSettings& settings, const std::string& out_dir,
+                                    const std::function<void(int, int)>& progress);
 
 // Writes a tone-mapped (x / (1 + x), sRGB) 8-bit PNG of the beauty layer.
-std::string WritePreviewPng(const std::string& path, const Frame& frame);
+Status WritePreviewPng(const std::string& path, const Frame& frame);
 
-// Writes one frame as float EXR to path (through path.tmp and a rename),
-// ZIP-compressed or not.
-std::string WriteExr(const std::string& path, const Frame& frame, bool with_stderr, bool compress = true);
+// Writes one frame as float EXR, ZIP-compressed or not.
+Status WriteFrameExr(const std::string& path, const Frame& frame, bool with_stderr, bool compress = true);
 
 }  // namespace shimmer::render

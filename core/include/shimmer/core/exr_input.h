@@ -1,5 +1,5 @@
-// Reading EXR files through OpenEXR's core C API (openexr.h), private to
-// shimmer_metrics.
+// Reading EXR files through OpenEXR's core C API (openexr.h): the one EXR
+// reader of shimmer (frames, masks, tests).
 //
 // Why not Imf::InputFile: the core API decodes each chunk (a block of
 // scanlines, or a tile) independently, so one frame's chunks are spread over
@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "shimmer/metrics/result.h"
+#include "shimmer/core/result.h"
 
-namespace shimmer::metrics::detail {
+namespace shimmer {
 
 struct ExrChannelInfo {
   std::string name;  // full name inside its part, e.g. "specular.R"
@@ -60,4 +60,4 @@ class ExrInput {
   std::vector<ExrPartInfo> parts_;
 };
 
-}  // namespace shimmer::metrics::detail
+}  // namespace shimmer

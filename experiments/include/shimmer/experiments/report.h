@@ -6,7 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "result_store.h"
+#include "shimmer/core/result.h"
+
+#include "shimmer/experiments/result_store.h"
 
 namespace shimmer::experiments {
 
@@ -14,10 +16,10 @@ namespace shimmer::experiments {
 // at most as costly and at most as wrong with one of them strictly better.
 std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<double>& error);
 
-// Writes the report for `rows` into `out_dir` (created). Returns an error
-// message, empty on success. Plots need gnuplot; without it the scripts and
-// data are still written and a warning names the scripts.
-std::string WriteReport(const std::vector<JobResult>& rows, const std::string& title, const std::string& out_dir,
+// Writes the report for `rows` into `out_dir` (created): every file or none
+// (StagedDirectory), report.md last. Plots need gnuplot; without it the
+// scripts and data are still written and a warning names the scripts.
+Status WriteReport(const std::vector<JobResult>& rows, const std::string& title, const std::string& out_dir,
                         std::vector<std::string>* warnings);
 
 }  // namespace shimmer::experiments

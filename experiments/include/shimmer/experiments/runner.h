@@ -6,12 +6,15 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "job.h"
-#include "result_store.h"
-#include "spec.h"
+#include "shimmer/core/result.h"
+#include "shimmer/experiments/job.h"
+#include "shimmer/renderer/renderer.h"
+#include "shimmer/experiments/result_store.h"
+#include "shimmer/experiments/spec.h"
 
 namespace shimmer::experiments {
 
@@ -36,20 +39,22 @@ struct RunOptions {
 
 struct RunSummary {
   int total = 0, skipped = 0, computed = 0;
-  std::string error;  // empty when every job finished
+  std::optional<Error> error;  // set when a job failed; the jobs before it are stored
 };
 
+// Every job is checked (scene, material, variant, parameters, sizes) before
+// the store is opened, so bad input leaves no store behind. The store is
+// locked for the run (StoreLock).
 RunSummary RunJobs(const std::vector<Job>& jobs, const RunOptions& options);
+
+// The renderer settings of a job; the error names the job's field.
+Result<render::RenderSettings> JobSettings(const Job& job, const RunOptions& options);
 
 // One job, measured against its reference (rendered on demand), as the row the
 // store keeps. Used by the runner and by sweeps and fits.
-struct Measured {
-  JobResult result;
-  std::string error;
-};
-Measured MeasureJob(const Job& job, const RunOptions& options);
+Result<JobResult> MeasureJob(const Job& job, const RunOptions& options);
 
-// Renders the job's reference into the cache unless it is there; returns an error message.
-std::string EnsureReference(const Job& job, const RunOptions& options);
+// Renders the job's reference into the cache unless it is there.
+Status EnsureReference(const Job& job, const RunOptions& options);
 
 }  // namespace shimmer::experiments

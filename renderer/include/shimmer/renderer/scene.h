@@ -4,12 +4,16 @@
 
 #include <glm/glm.hpp>
 
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
-#include "shading.h"
+#include <nlohmann/json_fwd.hpp>
+
+#include "shimmer/core/result.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::scene {
 
@@ -41,21 +45,21 @@ struct Scene {
   CameraRig rig;
 };
 
-template <class T>
-struct Parsed {
-  T value{};
-  std::string error;  // empty when fine
-  bool ok() const { return error.empty(); }
-};
+// Limits of a scene file: the BVH build recurses, and coordinates beyond
+// these lose every digit of a float in the kernel.
+inline constexpr std::size_t kMaxPrimitives = 1 << 20;
+inline constexpr double kMaxCoordinate = 1e6;
 
 std::vector<std::string_view> BuiltinSceneNames();
-// A built-in name, or else a path to a JSON scene file.
-Parsed<Scene> LoadScene(const std::string& name_or_file);
-Parsed<Scene> ParseSceneJson(std::string_view text, const std::string& source);
+// A built-in name, or else a path to a JSON scene file. Errors name the file
+// and the key ("s.json: primitives[0]: 'center' is required").
+Result<Scene> LoadScene(const std::string& name_or_file);
+Result<Scene> ParseSceneJson(std::string_view text, const std::string& source);
+Result<Scene> SceneFromJson(const nlohmann::json& json, const std::string& source);
 
 // NDF:ALPHA[,ALPHA_Y][,f0=V|R/G/B][,albedo=V|R/G/B], e.g. "ggx:0.05",
 // "beckmann:0.02,0.1,f0=0.9/0.6/0.3,albedo=0". Unset fields keep `base`'s.
-Parsed<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading::MaterialDesc& base);
+Result<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading::MaterialDesc& base);
 std::string MaterialSpec(const shading::MaterialDesc& m);
 
 // The words of scene.glsl's layout, BVH included.
@@ -66,10 +70,12 @@ int SceneFeatures(const Scene& scene);
 
 // --- camera paths -------------------------------------------------------------
 
+enum class CameraPath { kOrbit, kPan, kDolly, kVrJitter, kStatic };
 std::vector<std::string_view> CameraPathNames();
-bool IsCameraPath(std::string_view name);
+std::optional<CameraPath> ParseCameraPath(std::string_view name);
+std::string_view CameraPathName(CameraPath path);
 // The camera of `path` at time `frame / fps` seconds; deterministic.
-shading::CameraDesc CameraAt(std::string_view path, const CameraRig& rig, int frame, double fps, int width,
+shading::CameraDesc CameraAt(CameraPath path, const CameraRig& rig, int frame, double fps, int width,
                              int height);
 
 }  // namespace shimmer::scene

@@ -7,12 +7,12 @@
 #include <string>
 #include <vector>
 
-#include "fit_run.h"
-#include "spec.h"
+#include "shimmer/experiments/fit_run.h"
+#include "shimmer/experiments/spec.h"
 
 namespace shimmer::experiments {
 
-std::string WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::string& out_dir,
-                           std::vector<std::string>* warnings);
+Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::string& out_dir,
+                      std::vector<std::string>* warnings);
 
 }  // namespace shimmer::experiments

@@ -1,4 +1,4 @@
-#include "exr_input.h"
+#include "shimmer/core/exr_input.h"
 
 #include <ImfFrameBuffer.h>
 #include <ImfInputPart.h>
@@ -16,7 +16,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-namespace shimmer::metrics::detail {
+namespace shimmer {
 
 namespace fs = std::filesystem;
 
@@ -255,4 +255,4 @@ Status ExrInput::Read(int part, const std::vector<ExrPlaneRequest>& requests) co
   return Done{};
 }
 
-}  // namespace shimmer::metrics::detail
+}  // namespace shimmer

@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "spec.h"
+#include "shimmer/experiments/spec.h"
 
 namespace shimmer::experiments {
 

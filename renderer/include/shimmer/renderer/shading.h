@@ -4,6 +4,8 @@
 
 #include <glm/glm.hpp>
 
+#include "shimmer/core/result.h"
+
 #include <optional>
 #include <span>
 #include <string>
@@ -153,17 +155,32 @@ struct VariantInfo {
 std::span<const VariantInfo> Variants();
 const VariantInfo* FindVariant(std::string_view name);
 
-// Defaults of `info` overridden by `overrides` (name, value). Returns an error
-// message naming the problem for an unknown parameter or a value out of range.
-struct ResolvedParams {
-  Params<double> values;
-  std::string error;  // empty when fine
+// The four variant parameters, named once: what a variant may read, and the
+// values it accepts.
+struct ParamField {
+  std::string_view name;
+  double Params<double>::*member;
+  double lo, hi;  // accepted: [lo, hi], finite
+  std::string_view meaning;
 };
+std::span<const ParamField> ParamFields();
+const ParamField* FindParamField(std::string_view name);
 // The value of the parameter called `name` (fp_max, fp_min_cap, sigma2, kappa).
 double ParamValue(const Params<double>& params, std::string_view name);
+// Empty Status when `value` is accepted for `name`; else the error names the
+// parameter, the value and the accepted range.
+Status ValidateParam(std::string_view name, double value);
 
-ResolvedParams ResolveParams(const VariantInfo& info,
-                             std::span<const std::pair<std::string, double>> overrides);
+// Defaults of `info` overridden by `overrides` (name, value); the error names
+// an unknown parameter or a value out of range.
+Result<Params<double>> ResolveParams(const VariantInfo& info,
+                                     std::span<const std::pair<std::string, double>> overrides);
+// A user variant (--variant-file) may read any of the four parameters.
+struct UserParams {
+  Params<double> values;
+  std::vector<std::pair<std::string, double>> shown;  // the overrides, as given
+};
+Result<UserParams> ResolveUserParams(std::span<const std::pair<std::string, double>> overrides);
 
 // The GLSL sources of the shading core, by file name (core.glsl first).
 std::span<const std::pair<std::string_view, std::string_view>> GlslSources();
@@ -174,4 +191,30 @@ namespace shimmer::shading {
 // True when every catalogue entry's id equals its VARIANT_* constant in
 // variants.glsl (checked by a test).
 bool CatalogueMatchesGlsl();
+}  // namespace shimmer::shading
+
+namespace shimmer::shading {
+
+// --- Names parsed from text, once ----------------------------------------------
+
+// "quad" (= "quad-fine"), "quad-coarse", "analytic".
+std::optional<DerivativeSource> ParseDerivativeSource(std::string_view name);
+// The canonical name: "quad", "quad-coarse" or "analytic".
+std::string_view DerivativeSourceName(DerivativeSource source);
+inline constexpr std::string_view kDerivativeSourceList = "quad, quad-coarse or analytic";
+
+// What a variant name denotes: a catalogue entry, or supersample-N (N x N
+// stratified samples of `none`, the equal-time brute-force baseline).
+struct VariantName {
+  enum class Kind { kCatalogue, kSupersample };
+  Kind kind = Kind::kCatalogue;
+  const VariantInfo* info = nullptr;  // the catalogue entry; `none` for supersample-N
+  int spp_n = 1;                      // N of supersample-N, 1 otherwise
+  // True when the pixels read screen-space derivatives: not `none`, not supersample-N.
+  bool reads_derivatives() const { return kind == Kind::kCatalogue && info->id != 0; }
+};
+inline constexpr int kMaxSupersampleN = 64;
+// The error names `name` and says what would be accepted.
+Result<VariantName> ParseVariantName(std::string_view name);
+
 }  // namespace shimmer::shading

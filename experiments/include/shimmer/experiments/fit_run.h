@@ -17,9 +17,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "fit.h"
-#include "runner.h"
-#include "spec.h"
+#include "shimmer/experiments/fit.h"
+#include "shimmer/experiments/runner.h"
+#include "shimmer/experiments/spec.h"
 
 namespace shimmer::experiments {
 
@@ -63,13 +63,15 @@ struct FitLaw {
 struct FitOutcome {
   std::vector<MaterialFit> fits;
   std::vector<FitLaw> laws;
-  std::string error;  // empty when every fit finished
+  std::optional<Error> error;  // set when a fit stopped; the fits before it are complete
 };
 
 // Runs every fit of the spec. Evaluations are jobs: cached in the store at
 // options.db_path by job id (a rerun re-renders nothing) and their
 // references in options.work_dir; fitted rows go to the store's `fits` table.
+// `result` gets a line per fitted material; `progress` one per job rendered.
 FitOutcome RunFits(const Spec& spec, const RunOptions& options,
-                   const std::function<void(const std::string&)>& log = {});
+                   const std::function<void(const std::string&)>& result = {},
+                   const std::function<void(const std::string&)>& progress = {});
 
 }  // namespace shimmer::experiments

@@ -1,0 +1,30 @@
+// Plots are drawn by gnuplot from scripts kept beside their data, so that a
+// user can restyle a plot and rerun `gnuplot name.gp` by hand.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "shimmer/core/result.h"
+
+namespace shimmer {
+
+bool GnuplotAvailable();
+
+// Runs `gnuplot script` with `dir` as the working directory. The error (a
+// warning to most callers: the data and script are still there) names the
+// script and says whether gnuplot is missing or failed.
+Status RunGnuplot(const std::filesystem::path& dir, const std::string& script);
+
+// Writes `dir/<script_name>` = script_text("<output>") and draws `dir/<output>`
+// from it without a half-drawn file ever under that name: gnuplot runs on a
+// copy of the script aimed at a temporary name, which is then renamed.
+// Returns a warning when the plot could not be drawn; an error only when the
+// script could not be written.
+Result<std::optional<std::string>> WritePlot(const std::filesystem::path& dir, const std::string& script_name,
+                                             const std::string& output,
+                                             const std::function<std::string(const std::string&)>& script_text);
+
+}  // namespace shimmer

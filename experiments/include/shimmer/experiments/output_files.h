@@ -1,0 +1,49 @@
+// Writing report artefacts: a report's files appear together or not at all
+// (StagedDirectory), file-name slugs, number formatting.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "shimmer/core/result.h"
+
+namespace shimmer::experiments {
+
+// Files written into a hidden staging directory inside `out` and moved into
+// `out` by Commit(), `last` after every other: a report that fails (a full
+// disk, a write error) or is interrupted leaves the previous report as it
+// was, never half of a new one. Plot scripts run inside the staging
+// directory and name their outputs by their final names.
+class StagedDirectory {
+ public:
+  static Result<std::unique_ptr<StagedDirectory>> Create(const std::filesystem::path& out);
+  ~StagedDirectory();  // removes what was not committed
+  StagedDirectory(const StagedDirectory&) = delete;
+  StagedDirectory& operator=(const StagedDirectory&) = delete;
+
+  const std::filesystem::path& staging() const { return staging_; }
+  Status Write(const std::string& name, std::string_view text);
+  // Moves every staged file into `out`; `last` (e.g. "report.md") goes last.
+  Status Commit(const std::string& last);
+
+ private:
+  StagedDirectory(std::filesystem::path out, std::filesystem::path staging, bool created_out)
+      : out_(std::move(out)), staging_(std::move(staging)), created_out_(created_out) {}
+  std::filesystem::path out_, staging_;
+  bool created_out_;
+  bool committed_ = false;
+};
+
+// Letters and digits kept, everything else '_': a safe file-name stem.
+std::string Slug(const std::string& s);
+
+// printf-style, with "–" for NaN.
+std::string FormatNumber(double v, const char* format = "%.4g");
+
+// gnuplot text in single quotes ('' for a quote), e.g. a title.
+std::string GnuplotString(std::string_view text);
+
+}  // namespace shimmer::experiments

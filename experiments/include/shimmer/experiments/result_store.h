@@ -1,0 +1,90 @@
+// The results store: one SQLite row per finished job (every parameter, every
+// metric, timings, versions), written in a transaction so that a killed run
+// never leaves half a row.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "shimmer/core/result.h"
+#include "shimmer/experiments/job.h"
+
+struct sqlite3;
+
+namespace shimmer::experiments {
+
+struct JobResult {
+  std::string id;
+  std::string reference_id;
+  Job job;
+  nlohmann::json metrics;  // the metrics library's JSON (tv_ratio, tv_err, ...)
+  double gpu_ms_per_frame = 0;
+  double wall_s = 0;
+  std::string revision;
+  std::string core_version;
+  std::string device;  // the Vulkan device that rendered it, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
+  std::string driver;  // its driver and version, so that merged shards stay distinguishable
+};
+
+// A metric of the metrics library's JSON (e.g. "tv_err"), NaN when absent
+// or not a number; FlickerIndex reads flicker.flicker_index.
+double Metric(const nlohmann::json& metrics, const char* key);
+double FlickerIndex(const nlohmann::json& metrics);
+
+class ResultStore {
+ public:
+  enum class Mode {
+    kReadWrite,  // created when missing, schema brought up to date, WAL journal
+    kReadOnly,   // must exist; never written, not even its journal mode
+  };
+  // The error names the file and the cause.
+  static Result<std::unique_ptr<ResultStore>> Open(const std::string& path, Mode mode = Mode::kReadWrite);
+  ~ResultStore();
+
+  Result<bool> Has(const std::string& id);
+  Status Insert(const JobResult& result);
+  Result<std::vector<JobResult>> All();
+  Result<std::optional<JobResult>> Get(const std::string& id);
+
+  // Fit results (table `fits`), one row per (variant, parameter, material) of
+  // a fit, replaced when the fit is run again; `result` is the fit's JSON.
+  Status InsertFit(const std::string& variant, const std::string& param, const std::string& material, double value,
+                   double j_train, double j_validate, const nlohmann::json& result);
+  Result<std::vector<nlohmann::json>> Fits();
+
+ private:
+  explicit ResultStore(sqlite3* db, std::string path);
+  Result<std::vector<JobResult>> Select(const std::string& where, const std::string& id);
+  Status Exec(const std::string& sql);
+  Error Failure(const std::string& what) const;  // names the file and SQLite's reason
+  sqlite3* db_;
+  std::string path_;
+  bool has_device_columns_ = true;
+};
+
+// Joins the jobs of `inputs` into `output` (created when missing; rows whose
+// id it already has are kept). All or nothing: every input is read and
+// checked first, and a failure leaves `output` as it was. Returns the number
+// of jobs in `output` afterwards.
+Result<std::size_t> MergeStores(const std::vector<std::string>& inputs, const std::string& output);
+
+// One runner per store: an exclusive lock (flock) on "<store>.lock", held
+// while the object lives. A second runner on the same store fails at once,
+// with a message saying so, instead of both overwriting each other's frames.
+class StoreLock {
+ public:
+  static Result<std::unique_ptr<StoreLock>> Acquire(const std::string& store_path);
+  ~StoreLock();
+  StoreLock(const StoreLock&) = delete;
+  StoreLock& operator=(const StoreLock&) = delete;
+
+ private:
+  explicit StoreLock(int fd) : fd_(fd) {}
+  int fd_;
+};
+
+}  // namespace shimmer::experiments

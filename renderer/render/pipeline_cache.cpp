@@ -1,0 +1,152 @@
+#include "pipeline_cache.h"
+
+#include <chrono>
+#include <map>
+#include <mutex>
+#include <string_view>
+#include <tuple>
+
+namespace shimmer::render {
+
+namespace embedded {
+std::span<const std::pair<std::string_view, std::string_view>> Sources();
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double MsSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+constexpr std::string_view kUserVariantFile = "user_variant.glsl";
+
+// The kernel and the files it includes besides the shading core.
+std::vector<shading::GlslFile> KernelFiles(bool user_variant, shading::GlslFile* main) {
+  std::vector<shading::GlslFile> extra;
+  for (const auto& [name, body] : embedded::Sources()) {
+    if (name == "render.comp")
+      *main = {std::string(name), std::string(body)};
+    else
+      extra.push_back({std::string(name), std::string(body)});
+  }
+  if (user_variant) {
+    // After #version (line 1): keep the kernel's own line numbers after the define.
+    auto eol = main->text.find('\n');
+    main->text.insert(eol + 1, "#define SHIMMER_USER_VARIANT\n#line 2\n");
+  }
+  return extra;
+}
+
+// glslang names the user's file by its include name; the user knows it by
+// the path they gave.
+std::string NameUserFile(std::string log, const std::string& user_file) {
+  for (std::size_t p = 0; (p = log.find(kUserVariantFile, p)) != std::string::npos;) {
+    log.replace(p, kUserVariantFile.size(), user_file);
+    p += user_file.size();
+  }
+  return log;
+}
+
+struct SpirvCache {
+  std::mutex mutex;
+  std::map<std::string, std::shared_ptr<const shading::Spirv>> modules;
+};
+
+}  // namespace
+
+struct PipelineSlot {
+  std::once_flag compiled;
+  std::shared_ptr<vk::ComputePipeline> pipeline;
+  Error error;
+};
+using PipelineKey = std::pair<const shading::Spirv*, std::vector<std::int32_t>>;
+struct DevicePipelines {
+  std::mutex mutex;  // guards `slots`
+  std::map<PipelineKey, std::shared_ptr<PipelineSlot>> slots;
+};
+
+namespace {
+
+struct DeviceCache {
+  std::mutex mutex;
+  std::map<std::pair<std::string, bool>, DeviceHandle> devices;  // (device name, validation)
+};
+
+// Leaked on purpose, see DeviceHandle.
+SpirvCache& Modules() {
+  static auto* cache = new SpirvCache;
+  return *cache;
+}
+DeviceCache& Devices() {
+  static auto* cache = new DeviceCache;
+  return *cache;
+}
+
+}  // namespace
+
+Result<std::shared_ptr<const shading::Spirv>> KernelSpirv(const std::string& user_text, const std::string& user_file,
+                                                          double* compile_ms) {
+  const bool user = !user_file.empty();
+  const std::string key = user ? "user:" + user_text : std::string();
+  const auto t0 = Clock::now();
+  std::lock_guard lock(Modules().mutex);
+  if (auto it = Modules().modules.find(key); it != Modules().modules.end()) return it->second;
+  shading::GlslFile main;
+  std::vector<shading::GlslFile> extra = KernelFiles(user, &main);
+  if (user) extra.push_back({std::string(kUserVariantFile), user_text});
+  auto compiled = shading::CompileCompute(main, extra);
+  if (!compiled) {
+    if (!user) return Prefixed("render.comp does not compile", compiled.failure());
+    return Result<std::shared_ptr<const shading::Spirv>>::Failure(
+        user_file + ": does not compile as a variant:\n" + NameUserFile(compiled.error(), user_file));
+  }
+  auto module = std::make_shared<const shading::Spirv>(std::move(*compiled));
+  Modules().modules.emplace(key, module);
+  if (compile_ms) *compile_ms = MsSince(t0);
+  return module;
+}
+
+Result<DeviceHandle> AcquireDevice(const vk::ContextOptions& options) {
+  auto create = [&]() -> Result<DeviceHandle> {
+    auto context = vk::Context::Create(options);
+    if (!context) return context.failure();
+    return DeviceHandle{std::shared_ptr<vk::Context>(std::move(*context)), std::make_shared<DevicePipelines>()};
+  };
+  if (options.lose_device_after_dispatches >= 0) return create();
+  DeviceCache& cache = Devices();
+  std::lock_guard lock(cache.mutex);
+  DeviceHandle& entry = cache.devices[{options.device_name, options.validation}];
+  if (!entry.context) {
+    auto created = create();
+    if (!created) return created.failure();
+    entry = std::move(*created);
+  }
+  return entry;
+}
+
+Result<std::shared_ptr<vk::ComputePipeline>> AcquirePipeline(const DeviceHandle& device,
+                                                             const std::shared_ptr<const shading::Spirv>& spirv,
+                                                             std::span<const std::int32_t> specialization,
+                                                             std::span<const vk::BufferKind> bindings,
+                                                             std::uint32_t push_bytes, double* pipeline_ms) {
+  std::shared_ptr<PipelineSlot> slot;
+  {
+    // The SPIR-V modules live as long as the process, so their address is a key.
+    std::lock_guard lock(device.pipelines->mutex);
+    auto& entry = device.pipelines->slots[{spirv.get(), {specialization.begin(), specialization.end()}}];
+    if (!entry) entry = std::make_shared<PipelineSlot>();
+    slot = entry;
+  }
+  std::call_once(slot->compiled, [&] {
+    const auto t0 = Clock::now();
+    auto pipeline = device.context->CreatePipeline(*spirv, specialization, bindings, push_bytes);
+    if (pipeline)
+      slot->pipeline = std::shared_ptr<vk::ComputePipeline>(std::move(*pipeline));
+    else
+      slot->error = pipeline.failure();
+    if (pipeline_ms) *pipeline_ms = MsSince(t0);
+  });
+  if (!slot->pipeline) return slot->error;
+  return slot->pipeline;
+}
+
+}  // namespace shimmer::render

@@ -1,0 +1,30 @@
+// Test-only knobs of the renderer, kept out of the public RenderSettings.
+// They apply to renderers created while a ScopedTestHooks lives.
+#pragma once
+
+namespace shimmer::render::testing {
+
+struct TestHooks {
+  // Every dispatch after this many reports VK_ERROR_DEVICE_LOST (see
+  // vk::ContextOptions); the renderer then gets a private device. -1: never.
+  int lose_device_after_dispatches = -1;
+  // Rows per dispatch (a multiple of 8), to test banding on small images.
+  // 0: as many as the device's storage buffer range allows.
+  int band_rows = 0;
+};
+
+class ScopedTestHooks {
+ public:
+  explicit ScopedTestHooks(const TestHooks& hooks);
+  ~ScopedTestHooks();
+  ScopedTestHooks(const ScopedTestHooks&) = delete;
+  ScopedTestHooks& operator=(const ScopedTestHooks&) = delete;
+
+ private:
+  TestHooks previous_;
+};
+
+// The hooks in force (defaults outside a ScopedTestHooks).
+TestHooks CurrentTestHooks();
+
+}  // namespace shimmer::render::testing

@@ -1,0 +1,46 @@
+#include "variant_resolution.h"
+
+#include <cmath>
+#include <filesystem>
+
+namespace shimmer::render {
+
+Result<ResolvedVariant> ResolveVariant(const RenderSettings& s) {
+  using R = Result<ResolvedVariant>;
+  ResolvedVariant v;
+  const bool reference = s.reference_spp > 0 || s.reference_tolerance > 0;
+  if (!s.variant_file.empty()) {
+    if (reference) return R::Failure("a reference renders variant none, not a variant file");
+    v.name = "user:" + std::filesystem::path(s.variant_file).filename().string();
+    v.id = 0;
+    // A user variant may read any of the four parameters; each is validated
+    // as for the catalogue's variants.
+    auto params = shading::ResolveUserParams(s.param_overrides);
+    if (!params) return params.failure();
+    v.params = params->values;
+    v.shown_params = params->shown;
+    return v;
+  }
+  auto name = shading::ParseVariantName(s.variant);
+  if (!name) return name.failure();
+  if (name->kind == shading::VariantName::Kind::kSupersample) {
+    if (reference) return R::Failure("a reference is already supersampled; use variant none with reference_spp");
+    if (!s.param_overrides.empty()) return R::Failure("variant '" + s.variant + "' takes no parameters");
+  }
+  const shading::VariantInfo& info = *name->info;
+  if (reference && info.id != 0) return R::Failure("a reference renders variant none, not " + s.variant);
+  if (info.ggx_only && s.material.ndf != shading::Ndf::kGgx)
+    return R::Failure("variant " + s.variant + " filters GGX only; use a ggx material");
+  auto params = shading::ResolveParams(info, s.param_overrides);
+  if (!params) return params.failure();
+  v.name = s.variant;
+  v.id = info.id;
+  v.params = *params;
+  for (const shading::ParamInfo& p : info.params)
+    v.shown_params.push_back({std::string(p.name), shading::ParamValue(*params, p.name)});
+  v.reference = reference;
+  v.spp_n = reference ? (s.reference_spp > 0 ? s.reference_spp : 4) : name->spp_n;
+  return v;
+}
+
+}  // namespace shimmer::render

@@ -1,0 +1,85 @@
+// The four variant parameters (fp_max, fp_min_cap, sigma2, kappa): their one
+// table, validation, and the resolution of defaults and overrides.
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "shimmer/renderer/shading.h"
+
+namespace shimmer::shading {
+
+namespace {
+
+// Generous bounds: a sweep may explore far beyond the published values, but
+// NaN, infinities and negative widths are never a parameter.
+constexpr ParamField kParamFields[] = {
+    {"fp_max", &Params<double>::fp_max, 0, 1e6, "upper clamp on the slope-space footprint half-sides"},
+    {"fp_min_cap", &Params<double>::fp_min_cap, 0, 1e6, "cap of the lower clamp fp_min = min(alpha, fp_min_cap)"},
+    {"sigma2", &Params<double>::sigma2, 0, 1e6, "screen-space variance of the filtering kernel"},
+    {"kappa", &Params<double>::kappa, 0, 1, "clamp on the kernel roughness (added to alpha^2, which saturates at 1)"},
+};
+
+std::string Number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
+}  // namespace
+
+std::span<const ParamField> ParamFields() { return kParamFields; }
+
+const ParamField* FindParamField(std::string_view name) {
+  for (const ParamField& f : kParamFields)
+    if (f.name == name) return &f;
+  return nullptr;
+}
+
+double ParamValue(const Params<double>& params, std::string_view name) {
+  const ParamField* f = FindParamField(name);
+  return f ? params.*(f->member) : std::nan("");
+}
+
+Status ValidateParam(std::string_view name, double value) {
+  const ParamField* f = FindParamField(name);
+  if (!f) {
+    std::string list;
+    for (const ParamField& p : kParamFields) list += (list.empty() ? "" : ", ") + std::string(p.name);
+    return Status::Failure("unknown parameter '" + std::string(name) + "' (the parameters are " + list + ")");
+  }
+  if (!std::isfinite(value) || value < f->lo || value > f->hi)
+    return Status::Failure("parameter " + std::string(name) + " must be in [" + Number(f->lo) + ", " +
+                           Number(f->hi) + "], got " + Number(value));
+  return Ok();
+}
+
+Result<Params<double>> ResolveParams(const VariantInfo& info,
+                                     std::span<const std::pair<std::string, double>> overrides) {
+  Params<double> values;
+  for (const ParamInfo& p : info.params) values.*(FindParamField(p.name)->member) = p.default_value;
+  for (const auto& [name, value] : overrides) {
+    bool known = false;
+    for (const ParamInfo& p : info.params) known = known || p.name == name;
+    if (!known) {
+      std::string list;
+      for (const ParamInfo& p : info.params) list += (list.empty() ? "" : ", ") + std::string(p.name);
+      return Result<Params<double>>::Failure("variant " + std::string(info.name) + " has no parameter '" + name +
+                                             "'" + (list.empty() ? " (it takes none)" : " (it takes: " + list + ")"));
+    }
+    if (Status s = ValidateParam(name, value); !s) return s.failure();
+    values.*(FindParamField(name)->member) = value;
+  }
+  return values;
+}
+
+Result<UserParams> ResolveUserParams(std::span<const std::pair<std::string, double>> overrides) {
+  UserParams user;
+  for (const auto& [name, value] : overrides) {
+    if (Status s = ValidateParam(name, value); !s) return s.failure();
+    user.values.*(FindParamField(name)->member) = value;
+    user.shown.push_back({name, value});
+  }
+  return user;
+}
+
+}  // namespace shimmer::shading

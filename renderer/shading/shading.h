@@ -162,6 +162,27 @@ struct ResolvedParams {
 // The value of the parameter called `name` (fp_max, fp_min_cap, sigma2, kappa).
 double ParamValue(const Params<double>& params, std::string_view name);
 
+// The four variant parameters (VariantParams of variants.glsl) and their valid
+// ranges: the one table that every validation path reads (ResolveParams,
+// ValidateParam, and through it the renderer's user variant files). A value is
+// valid when it is finite, above `lower` (or equal to it where
+// `lower_inclusive`) and at most `upper`.
+struct ParamRange {
+  std::string_view name;
+  double Params<double>::*member;
+  double lower;
+  bool lower_inclusive;
+  double upper;
+  std::string_view meaning;
+};
+std::span<const ParamRange> ParamRanges();
+const ParamRange* FindParamRange(std::string_view name);
+
+// Empty when `value` is valid for the parameter called `name`; otherwise one
+// line that names the parameter and its range ("parameter sigma2 must be >= 0
+// and <= 10000, got nan"), or lists the parameters when none has that name.
+std::string ValidateParam(std::string_view name, double value);
+
 ResolvedParams ResolveParams(const VariantInfo& info,
                              std::span<const std::pair<std::string, double>> overrides);
 

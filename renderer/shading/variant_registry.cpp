@@ -1,6 +1,7 @@
 // The variant catalogue: names, parameters with defaults, and sources, as
 // listed by `shimmer variants` and accepted by specs and `shimmer ndf`.
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "shading.h"
@@ -90,24 +91,58 @@ std::optional<Ndf> ParseNdf(std::string_view name) {
 
 std::string_view NdfName(Ndf ndf) { return ndf == Ndf::kGgx ? "ggx" : "beckmann"; }
 
+namespace {
+
+// Upper bounds sit where a parameter stops changing anything, or, for the
+// kernel constants, far beyond what engines use (<= 1) yet low enough that the
+// renderer's float push constants and their products stay finite.
+const ParamRange kParamRanges[] = {
+    {"fp_max", &Params<double>::fp_max, 0, true, 1e4,
+     "upper clamp on the footprint half-sides; half-sides are capped at 1e4 (FOOTPRINT_MAX in variants.glsl)"},
+    {"fp_min_cap", &Params<double>::fp_min_cap, 0, true, 100,
+     "fp_min = min(alpha, fp_min_cap); alpha is clamped to 100 (ALPHA_MAX in common.glsl)"},
+    {"sigma2", &Params<double>::sigma2, 0, true, 1e4, "screen-space variance of the filtering kernel"},
+    {"kappa", &Params<double>::kappa, 0, true, 1e4, "clamp on the kernel roughness"},
+};
+
+std::string Number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", x);
+  return text;
+}
+
+}  // namespace
+
+std::span<const ParamRange> ParamRanges() { return kParamRanges; }
+
+const ParamRange* FindParamRange(std::string_view name) {
+  for (const ParamRange& r : kParamRanges)
+    if (r.name == name) return &r;
+  return nullptr;
+}
+
+std::string ValidateParam(std::string_view name, double value) {
+  const ParamRange* r = FindParamRange(name);
+  if (!r) {
+    std::string list;
+    for (const ParamRange& p : kParamRanges) list += (list.empty() ? "" : ", ") + std::string(p.name);
+    return "unknown parameter '" + std::string(name) + "' (the parameters are " + list + ")";
+  }
+  const bool above = r->lower_inclusive ? value >= r->lower : value > r->lower;
+  if (std::isfinite(value) && above && value <= r->upper) return "";
+  return "parameter " + std::string(name) + " must be " + (r->lower_inclusive ? ">= " : "> ") + Number(r->lower) +
+         " and <= " + Number(r->upper) + ", got " + Number(value);
+}
+
 double ParamValue(const Params<double>& params, std::string_view name) {
-  if (name == "fp_max") return params.fp_max;
-  if (name == "fp_min_cap") return params.fp_min_cap;
-  if (name == "sigma2") return params.sigma2;
-  return params.kappa;
+  const ParamRange* r = FindParamRange(name);
+  return r ? params.*(r->member) : params.kappa;
 }
 
 ResolvedParams ResolveParams(const VariantInfo& info,
                              std::span<const std::pair<std::string, double>> overrides) {
   ResolvedParams r;
-  auto slot = [&r](std::string_view name) -> double* {
-    if (name == "fp_max") return &r.values.fp_max;
-    if (name == "fp_min_cap") return &r.values.fp_min_cap;
-    if (name == "sigma2") return &r.values.sigma2;
-    if (name == "kappa") return &r.values.kappa;
-    return nullptr;
-  };
-  for (const ParamInfo& p : info.params) *slot(p.name) = p.default_value;
+  for (const ParamInfo& p : info.params) r.values.*(FindParamRange(p.name)->member) = p.default_value;
   for (const auto& [name, value] : overrides) {
     bool known = false;
     for (const ParamInfo& p : info.params) known = known || p.name == name;
@@ -118,11 +153,9 @@ ResolvedParams ResolveParams(const VariantInfo& info,
                 (list.empty() ? " (it takes none)" : " (it takes: " + list + ")");
       return r;
     }
-    if (!std::isfinite(value) || value < 0) {
-      r.error = "parameter " + name + " must be a finite value >= 0, got " + std::to_string(value);
-      return r;
-    }
-    *slot(name) = value;
+    r.error = ValidateParam(name, value);
+    if (!r.error.empty()) return r;
+    r.values.*(FindParamRange(name)->member) = value;
   }
   return r;
 }

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -25,9 +26,31 @@ struct NdfOptions {
   bool json = false;
 };
 
+std::string Number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
+}
+
 void RequireFinite(const std::vector<double>& values, const char* option) {
   for (double v : values)
-    if (!std::isfinite(v)) throw UsageError(std::string(option) + " must be finite, got " + std::to_string(v));
+    if (!std::isfinite(v)) throw UsageError(std::string(option) + " must be finite, got " + Number(v));
+}
+
+// The core takes finite inputs only: a value that does not fit the evaluation
+// precision would reach it as Inf (and come out as NaN). `factor` is what
+// Evaluate multiplies the value by in that precision (the footprint's 2).
+void RequireRepresentable(const std::vector<double>& values, const char* option, const std::string& precision,
+                          double factor = 1) {
+  const bool in_float = precision == "float";
+  const double largest = in_float ? double(std::numeric_limits<float>::max()) : std::numeric_limits<double>::max();
+  for (double v : values) {
+    const bool fits = in_float ? std::isfinite(float(factor) * float(v)) : std::isfinite(factor * v);
+    if (!fits)
+      throw UsageError(std::string(option) + " " + Number(v) + " is out of range for --precision " + precision +
+                       " (" + (factor == 1 ? "" : Number(factor) + " x ") + "|value| must be at most " +
+                       Number(largest) + ")");
+  }
 }
 
 // The footprint (FX, FY) is the half-side pair of the slope-space rectangle.
@@ -40,7 +63,7 @@ template <class T>
 shading::FilteredNdf<T> Evaluate(const shading::VariantInfo& info, shading::Ndf ndf, const NdfOptions& o,
                                  const shading::Params<double>& p) {
   shading::Footprint<T> f;
-  T fx = T(o.footprint[0]), fy = T(o.footprint[1]);
+  T fx = T(o.footprint[0]), fy = T(o.footprint[1]);  // 2 fx is finite: RequireRepresentable
   f.hpp = {T(o.slope[0]), T(o.slope[1])};
   f.dhpp_dx = {T(2) * fx, T(0)};
   f.dhpp_dy = {T(0), T(2) * fy};
@@ -60,18 +83,22 @@ void Run(const NdfOptions& o) {
   if (!ndf) throw UsageError("--ndf must be ggx or beckmann, got '" + o.ndf + "'");
   if (info->ggx_only && *ndf != shading::Ndf::kGgx)
     throw UsageError("variant " + o.variant + " filters GGX only; use --ndf ggx");
+  if (o.precision != "float" && o.precision != "double")
+    throw UsageError("--precision must be float or double, got '" + o.precision + "'");
   RequireFinite(o.alpha, "--alpha");
   RequireFinite(o.slope, "--slope");
   RequireFinite(o.footprint, "--footprint");
   for (double a : o.alpha)
-    if (!(a > 0)) throw UsageError("--alpha must be > 0, got " + std::to_string(a));
+    if (!(a > 0)) throw UsageError("--alpha must be > 0, got " + Number(a));
   for (double f : o.footprint)
-    if (f < 0) throw UsageError("--footprint half-sides must be >= 0, got " + std::to_string(f));
-  if (o.precision != "float" && o.precision != "double")
-    throw UsageError("--precision must be float or double, got '" + o.precision + "'");
+    if (f < 0) throw UsageError("--footprint half-sides must be >= 0, got " + Number(f));
+  RequireRepresentable(o.alpha, "--alpha", o.precision);
+  RequireRepresentable(o.slope, "--slope", o.precision);
+  RequireRepresentable(o.footprint, "--footprint", o.precision, 2);
 
   std::vector<std::pair<std::string, double>> overrides;
   for (const std::string& p : o.params) overrides.push_back(ParseParamOption(p));
+  // ResolveParams holds every parameter to ParamFields(), whose bounds are finite floats.
   const shading::Params<double> resolved = Take(shading::ResolveParams(*info, overrides));
 
   double slope_density = 0, density = 0, aex = 0, aey = 0;

@@ -34,8 +34,14 @@ vec2 clampSlope(vec2 s) {
 }
 
 // normalize() that keeps `fallback` for a (near) zero vector instead of NaN.
+// A vector longer than ~1e19 squares to Inf in float, and inversesqrt(Inf)
+// would turn it into the zero vector; it is scaled down first.
 vec3 safeNormalize(vec3 v, vec3 fallback) {
   real len2 = dot(v, v);
+  if (len2 > real(1e30)) {
+    v = v / max(abs(v.x), max(abs(v.y), abs(v.z)));
+    len2 = dot(v, v);
+  }
   if (!(len2 > real(1e-30))) return fallback;
   return v * inversesqrt(len2);
 }

@@ -30,9 +30,21 @@ real slopeDensity(int ndf, vec2 s, vec2 a) {
   return ggxP22(s, a);
 }
 
-// Slope density with a full symmetric roughness matrix R = [[r.x, r.y], [r.y, r.z]]
-// (seed 000, "Filtering Beckmann": R' = R + 2C). For GGX the same quadratic
-// form generalises the ellipsoid NDF to an arbitrary orientation.
+// Slope density of a distribution with roughness matrix R, given the
+// quadratic form q = s^T R^-1 s and det R (seed 000_16155bfd1e3ea941.txt,
+// "Filtering Beckmann": R' = R + 2C). For GGX the same quadratic form
+// generalises the ellipsoid NDF to an arbitrary orientation. q >= 0, det > 0.
+real slopeDensityQuadratic(int ndf, real q, real det) {
+  real norm = PI * sqrt(det);
+  if (ndf == NDF_BECKMANN) return exp(-q) / norm;
+  real t = real(1) + q;
+  return real(1) / (norm * t * t);
+}
+
+// Slope density with a full symmetric roughness matrix R = [[r.x, r.y], [r.y, r.z]].
+// Where R is nearly singular, r.x r.z - r.y^2 and the quadratic form cancel;
+// callers that know how R was built should form both without cancellation
+// (k16Parallelogram does) and call slopeDensityQuadratic.
 real slopeDensityMatrix(int ndf, vec2 s, vec3 r) {
   s = clampSlope(s);
   real amin2 = ALPHA_MIN * ALPHA_MIN;
@@ -40,11 +52,9 @@ real slopeDensityMatrix(int ndf, vec2 s, vec3 r) {
   real r11 = max(r.z, amin2);
   // Keep R positive definite when rounding makes det(R) ~ 0.
   real det = max(r00 * r11 - r.y * r.y, amin2 * amin2);
-  real q = (r11 * s.x * s.x - real(2) * r.y * s.x * s.y + r00 * s.y * s.y) / det;
-  real norm = PI * sqrt(det);
-  if (ndf == NDF_BECKMANN) return exp(-q) / norm;
-  real t = real(1) + q;
-  return real(1) / (norm * t * t);
+  // A form that rounds below zero would make exp(-q) overflow.
+  real q = max((r11 * s.x * s.x - real(2) * r.y * s.x * s.y + r00 * s.y * s.y) / det, real(0));
+  return slopeDensityQuadratic(ndf, q, det);
 }
 
 // 1 / h.z^4 for h = normalize(s.x, s.y, 1): the Jacobian from slope to solid angle.

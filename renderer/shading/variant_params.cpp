@@ -10,13 +10,17 @@ namespace shimmer::shading {
 
 namespace {
 
-// Generous bounds: a sweep may explore far beyond the published values, but
-// NaN, infinities and negative widths are never a parameter.
+// Upper bounds sit where a parameter stops changing anything, or, for the
+// kernel constants, far beyond what engines use (<= 1) yet low enough that the
+// renderer's float push constants and their products stay finite. NaN,
+// infinities and negative widths are never a parameter.
 constexpr ParamField kParamFields[] = {
-    {"fp_max", &Params<double>::fp_max, 0, 1e6, "upper clamp on the slope-space footprint half-sides"},
-    {"fp_min_cap", &Params<double>::fp_min_cap, 0, 1e6, "cap of the lower clamp fp_min = min(alpha, fp_min_cap)"},
-    {"sigma2", &Params<double>::sigma2, 0, 1e6, "screen-space variance of the filtering kernel"},
-    {"kappa", &Params<double>::kappa, 0, 1, "clamp on the kernel roughness (added to alpha^2, which saturates at 1)"},
+    {"fp_max", &Params<double>::fp_max, 0, 1e4,
+     "upper clamp on the footprint half-sides; half-sides are capped at 1e4 (FOOTPRINT_MAX in variants.glsl)"},
+    {"fp_min_cap", &Params<double>::fp_min_cap, 0, 100,
+     "fp_min = min(alpha, fp_min_cap); alpha is clamped to 100 (ALPHA_MAX in common.glsl)"},
+    {"sigma2", &Params<double>::sigma2, 0, 1e4, "screen-space variance of the filtering kernel"},
+    {"kappa", &Params<double>::kappa, 0, 1e4, "clamp on the kernel roughness"},
 };
 
 std::string Number(double x) {
@@ -48,8 +52,8 @@ Status ValidateParam(std::string_view name, double value) {
     return Status::Failure("unknown parameter '" + std::string(name) + "' (the parameters are " + list + ")");
   }
   if (!std::isfinite(value) || value < f->lo || value > f->hi)
-    return Status::Failure("parameter " + std::string(name) + " must be in [" + Number(f->lo) + ", " +
-                           Number(f->hi) + "], got " + Number(value));
+    return Status::Failure("parameter " + std::string(name) + " must be >= " + Number(f->lo) + " and <= " +
+                           Number(f->hi) + ", got " + Number(value));
   return Ok();
 }
 

@@ -51,7 +51,15 @@ vec2 footprintHalfSides(ShadingFootprint f) {
   return (abs(f.dhpp_dx) + abs(f.dhpp_dy)) * real(0.5);
 }
 
-real normalSpread(vec3 dx, vec3 dy) { return dot(dx, dx) + dot(dy, dy); }
+// Spread of the normals over the pixel, S = |dn/dx|^2 + |dn/dy|^2 (seed
+// 000_16155bfd1e3ea941.txt: "look at the spread of shading normals
+// (ddx/ddy)"). Saturated at SPREAD_MAX: derivatives beyond ~1e19 per pixel
+// square to Inf in float, and the kernels' sigma2 S is then NaN for sigma2 = 0.
+// The kernels are min(c sigma2 S, kappa) with c >= 1 and kappa <= 1e4
+// (ParamRanges), so a spread of 1e30 already saturates them for any sigma2
+// above 1e-26, and c sigma2 S stays finite in float for sigma2 <= 1e4.
+const real SPREAD_MAX = real(1e30);
+real normalSpread(vec3 dx, vec3 dy) { return min(dot(dx, dx) + dot(dy, dy), SPREAD_MAX); }
 
 FilteredNdf widenedNdf(int ndf, vec2 hpp, vec2 alpha2) {
   FilteredNdf r;
@@ -74,16 +82,34 @@ vec2 k16RectAlpha2(vec2 alpha, ShadingFootprint f, real fpMax) {
 // 0.5 px Gaussian pixel filter, i.e. half of the per-pixel derivatives; with
 // that scale the parallelogram and the rect agree on axis-aligned footprints
 // (the slide's bare U = dh/duv would widen four times as much).
+//
+// det R' and the form s^T adj(R') s are written as sums of squares (adj is
+// linear on 2x2 matrices and adj(U U^T) = adj(U)^T adj(U)):
+//   det R' = ax^2 ay^2 + 2 (ay^2 C_xx + ax^2 C_yy) + 4 det(U)^2,
+//   s^T adj(R') s = ay^2 s.x^2 + ax^2 s.y^2 + 2 (cross(s, ux)^2 + cross(s, uy)^2).
+// For a nearly rank-one footprint (dx hpp ~ parallel to dy hpp, or both clamped
+// to FOOTPRINT_MAX) the textbook r00 r11 - r01^2 cancels in float to anything,
+// and a form that rounds to zero or below made the density Inf far from the
+// lobe (seed 000_16155bfd1e3ea941.txt gives R' only, not how to evaluate it).
+real cross2(vec2 a, vec2 b) { return a.x * b.y - a.y * b.x; }
+
 FilteredNdf k16Parallelogram(int ndf, vec2 alpha, ShadingFootprint f) {
   vec2 ux = real(0.5) * f.dhpp_dx;
   vec2 uy = real(0.5) * f.dhpp_dy;
-  vec3 r = vec3(alpha.x * alpha.x + real(2) * (ux.x * ux.x + uy.x * uy.x),
-                real(2) * (ux.x * ux.y + uy.x * uy.y),
-                alpha.y * alpha.y + real(2) * (ux.y * ux.y + uy.y * uy.y));
+  vec2 s = clampSlope(f.hpp);
+  real ax2 = alpha.x * alpha.x;
+  real ay2 = alpha.y * alpha.y;
+  real cxx = ux.x * ux.x + uy.x * uy.x;
+  real cyy = ux.y * ux.y + uy.y * uy.y;
+  real detU = cross2(ux, uy);
+  real det = ax2 * ay2 + real(2) * (ay2 * cxx + ax2 * cyy) + real(4) * detU * detU;
+  real cx = cross2(s, ux);
+  real cy = cross2(s, uy);
+  real form = ay2 * s.x * s.x + ax2 * s.y * s.y + real(2) * (cx * cx + cy * cy);
   FilteredNdf o;
-  o.alpha_eff = sqrt(vec2(r.x, r.z));
-  o.slope_density = slopeDensityMatrix(ndf, f.hpp, r);
-  o.density = o.slope_density * slopeToSolidAngle(f.hpp);
+  o.alpha_eff = sqrt(vec2(ax2 + real(2) * cxx, ay2 + real(2) * cyy));
+  o.slope_density = slopeDensityQuadratic(ndf, form / det, det);
+  o.density = o.slope_density * slopeToSolidAngle(s);
   return o;
 }
 

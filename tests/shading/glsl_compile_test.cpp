@@ -1,12 +1,22 @@
-// Every GLSL source of the shading core compiles to SPIR-V, and compile errors
-// name the file and line.
+// Every GLSL file of the project compiles to SPIR-V (the shading core's files
+// in their include context, the renderer's kernels as the renderer compiles
+// them), and compile errors name the file and line.
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "shimmer/renderer/shading.h"
 #include "spirv_compiler.h"
 
 namespace shimmer::shading {
 namespace {
+
+namespace fs = std::filesystem;
 
 // A compute shader that calls every entry point of the core so that nothing
 // is dead-code-eliminated before validation.
@@ -34,24 +44,106 @@ void main() {
 }
 )";
 
-TEST(GlslCompile, EveryCoreFileCompilesToSpirv) {
-  // Each file on its own (after its dependencies), so an error points at it.
-  std::string prefix = "#version 460\n#extension GL_GOOGLE_include_directive : require\n#define real float\n";
+// The project's GLSL as it is in the source tree: every *.glsl under
+// renderer/shading and every *.comp under renderer/shaders, so that a new file
+// is covered without touching this test.
+std::vector<GlslFile> FilesOnDisk(const char* folder, const char* extension) {
+  std::vector<GlslFile> files;
+  const fs::path root = fs::path(SHIMMER_SOURCE_DIR) / folder;
+  for (const auto& e : fs::recursive_directory_iterator(root)) {
+    if (!e.is_regular_file() || e.path().extension() != extension) continue;
+    std::ifstream in(e.path(), std::ios::binary);
+    std::stringstream text;
+    text << in.rdbuf();
+    files.push_back({e.path().lexically_relative(root).generic_string(), text.str()});
+  }
+  std::sort(files.begin(), files.end(), [](const GlslFile& a, const GlslFile& b) { return a.name < b.name; });
+  return files;
+}
+
+// The files core.glsl includes, in its order (each one's dependencies first).
+std::vector<std::string> CoreOrder(const std::vector<GlslFile>& shading) {
+  std::vector<std::string> order;
+  for (const GlslFile& f : shading) {
+    if (f.name != "core.glsl") continue;
+    std::istringstream lines(f.text);
+    std::string line;
+    while (std::getline(lines, line)) {
+      const auto open = line.find("#include \"");
+      if (open == std::string::npos) continue;
+      const auto start = open + 10, close = line.find('"', start);
+      order.push_back(line.substr(start, close - start));
+    }
+  }
+  return order;
+}
+
+const char* kPrefix = "#version 460\n#extension GL_GOOGLE_include_directive : require\n#define real float\n";
+
+TEST(GlslCompile, ShadingSourcesOnDiskAreTheEmbeddedOnes) {
+  const std::vector<GlslFile> disk = FilesOnDisk("renderer/shading", ".glsl");
+  ASSERT_GE(disk.size(), 8u);
+  for (const GlslFile& f : disk) {
+    bool embedded = false;
+    for (const auto& [name, text] : GlslSources())
+      if (name == f.name) {
+        embedded = true;
+        EXPECT_EQ(text, f.text) << f.name << " differs from its embedded copy (stale build?)";
+      }
+    EXPECT_TRUE(embedded) << "renderer/shading/" << f.name
+                          << " is not embedded: add it to SHADING_GLSL in renderer/CMakeLists.txt";
+  }
+  EXPECT_EQ(GlslSources().size(), disk.size());
+}
+
+TEST(GlslCompile, EveryShadingFileCompilesToSpirvInItsContext) {
+  // Each file is an include-only fragment: compiled after the files core.glsl
+  // includes before it, so that an error points at that file. A file core.glsl
+  // does not include is compiled after the whole core.
+  const std::vector<GlslFile> disk = FilesOnDisk("renderer/shading", ".glsl");
+  const std::vector<std::string> order = CoreOrder(disk);
+  ASSERT_GE(order.size(), 7u);
   int compiled = 0;
-  for (const auto& [name, text] : GlslSources()) {
-    if (name == "core.glsl") continue;
-    std::string body = prefix;
-    for (const auto& [dep, unused] : GlslSources()) {
-      if (dep == "core.glsl") continue;
-      body += "#include \"" + std::string(dep) + "\"\n";
-      if (dep == name) break;
+  for (const GlslFile& f : disk) {
+    std::string body = kPrefix;
+    if (std::find(order.begin(), order.end(), f.name) == order.end()) {
+      body += "#include \"core.glsl\"\n";
+      if (f.name != "core.glsl") body += "#include \"" + f.name + "\"\n";
+    } else {
+      for (const std::string& dep : order) {
+        body += "#include \"" + dep + "\"\n";
+        if (dep == f.name) break;
+      }
     }
     body += "layout(local_size_x = 1) in;\nvoid main() {}\n";
-    auto r = CompileCompute({"check_" + std::string(name) + ".comp", body});
-    EXPECT_TRUE(r.ok()) << name << ":\n" << r.error();
+    auto r = CompileCompute({"check_" + f.name + ".comp", body}, disk);
+    EXPECT_TRUE(r.ok()) << f.name << ":\n" << r.error();
     ++compiled;
   }
-  EXPECT_GE(compiled, 4);
+  EXPECT_EQ(compiled, int(disk.size()));
+}
+
+// Every kernel compiles as the renderer compiles it: as it is, and, where it
+// takes a user variant file (--variant-file), with SHIMMER_USER_VARIANT defined
+// after #version and a user_variant.glsl, as pipeline_cache.cpp's KernelFiles does.
+TEST(GlslCompile, EveryKernelCompilesToSpirv) {
+  std::vector<GlslFile> extra = FilesOnDisk("renderer/shading", ".glsl");
+  for (GlslFile& f : FilesOnDisk("renderer/shaders", ".glsl")) extra.push_back(std::move(f));  // channels.glsl
+  extra.push_back({"user_variant.glsl",
+                   "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {\n"
+                   "  return evalVariant(VARIANT_TK19, ndf, alpha * real(2), f, p);\n}\n"});
+  const std::vector<GlslFile> kernels = FilesOnDisk("renderer/shaders", ".comp");
+  ASSERT_GE(kernels.size(), 1u);
+  for (const GlslFile& k : kernels) {
+    auto r = CompileCompute(k, extra);
+    EXPECT_TRUE(r.ok()) << k.name << ":\n" << r.error();
+    EXPECT_GT(r->size(), 100u) << k.name;
+    if (k.text.find("SHIMMER_USER_VARIANT") == std::string::npos) continue;
+    GlslFile user = k;
+    user.text.insert(user.text.find('\n') + 1, "#define SHIMMER_USER_VARIANT\n#line 2\n");
+    auto u = CompileCompute(user, extra);
+    EXPECT_TRUE(u.ok()) << k.name << " with a user variant:\n" << u.error();
+  }
 }
 
 TEST(GlslCompile, KernelCallingEveryVariantCompiles) {

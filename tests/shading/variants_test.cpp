@@ -2,6 +2,7 @@
 // against double on a grid of hard cases, and finite output for degenerate input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -170,6 +171,73 @@ void ExpectFiniteEverywhere() {
 
 TEST(Variants, FloatStaysFiniteForDegenerateInput) { ExpectFiniteEverywhere<float>(); }
 TEST(Variants, DoubleStaysFiniteForDegenerateInput) { ExpectFiniteEverywhere<double>(); }
+
+// Normal derivatives whose squares overflow float (beyond ~1e19 per pixel)
+// filter as in double: Toksvig's quad normals once collapsed to zero length
+// in float (no widening at all), and sigma2 = 0 times the Inf spread was NaN.
+TEST(Variants, HugeNormalDerivativesFilterInFloatAsInDouble) {
+  for (const VariantInfo& v : Variants()) {
+    if (!v.widens_roughness) continue;
+    for (double sigma2 : {-1.0, 0.0}) {  // -1: the variant's default
+      Params<double> pd = DefaultParams<double>(v);
+      const bool has_sigma2 =
+          std::any_of(v.params.begin(), v.params.end(), [](const ParamInfo& p) { return p.name == "sigma2"; });
+      if (sigma2 >= 0 && !has_sigma2) continue;
+      if (sigma2 >= 0) pd.sigma2 = sigma2;
+      const Params<float> pf{float(pd.fp_max), float(pd.fp_min_cap), float(pd.sigma2), float(pd.kappa)};
+      for (double d : {1e10, 1e19, 1e20, 1e30}) {
+        Footprint<double> fd;
+        fd.n = {0.6, 0, 0.8};
+        fd.dn_dx = {d, 0, 0};
+        fd.dn_dy = {0, -d, 0};
+        fd.dng_dx = fd.dn_dx;
+        fd.dng_dy = fd.dn_dy;
+        fd.dhpp_dx = {0.01, 0};
+        fd.dhpp_dy = {0, 0.01};
+        Footprint<float> ff;
+        ff.n = glm::vec3(fd.n);
+        ff.dn_dx = glm::vec3(fd.dn_dx);
+        ff.dn_dy = glm::vec3(fd.dn_dy);
+        ff.dng_dx = ff.dn_dx;
+        ff.dng_dy = ff.dn_dy;
+        ff.dhpp_dx = glm::vec2(fd.dhpp_dx);
+        ff.dhpp_dy = glm::vec2(fd.dhpp_dy);
+        const auto rd = EvaluateVariant<double>(v.id, Ndf::kGgx, {0.05, 0.05}, fd, pd);
+        const auto rf = EvaluateVariant<float>(v.id, Ndf::kGgx, {0.05f, 0.05f}, ff, pf);
+        EXPECT_NEAR(rf.alpha_eff.x, rd.alpha_eff.x, 1e-5 * rd.alpha_eff.x)
+            << v.name << " sigma2 " << pd.sigma2 << " dn " << d;
+        EXPECT_NEAR(rf.slope_density, rd.slope_density, 1e-4 * rd.slope_density)
+            << v.name << " sigma2 " << pd.sigma2 << " dn " << d;
+      }
+    }
+  }
+}
+
+// A rank-one footprint (dx hpp parallel to dy hpp, here both clamped to
+// FOOTPRINT_MAX) with the half vector far out along it: det R' and the form
+// of R'^-1 cancel in float when formed from R' itself.
+TEST(Variants, ParallelogramOfRankOneFootprintAgreesWithDouble) {
+  const VariantInfo* v = FindVariant("k16-beckmann-parallelogram");
+  for (Ndf ndf : {Ndf::kGgx, Ndf::kBeckmann})
+    for (double a : {1e-4, 1e-3, 0.05})
+      for (double s : {1.0, 1e3, 1e6, 1e8}) {
+        Footprint<double> fd;
+        fd.hpp = {s, s};
+        fd.dhpp_dx = {1e5, 1e5};
+        fd.dhpp_dy = {-1e6, -1e6};
+        Footprint<float> ff;
+        ff.hpp = glm::vec2(fd.hpp);
+        ff.dhpp_dx = glm::vec2(fd.dhpp_dx);
+        ff.dhpp_dy = glm::vec2(fd.dhpp_dy);
+        const auto rd = EvaluateVariant<double>(v->id, ndf, {a, a}, fd, {});
+        const auto rf = EvaluateVariant<float>(v->id, ndf, {float(a), float(a)}, ff, {});
+        const std::string where = std::string(NdfName(ndf)) + " alpha " + std::to_string(a) + " slope " +
+                                  std::to_string(s);
+        EXPECT_TRUE(std::isfinite(rf.density)) << where;
+        EXPECT_NEAR(rf.slope_density, rd.slope_density, 1e-4 * rd.slope_density + 1e-30) << where;
+        EXPECT_NEAR(rf.density, rd.density, 1e-4 * rd.density + 1e-30) << where;
+      }
+}
 
 // Grazing: h.z -> 0 is a huge slope; the density must fall to zero, not blow up.
 TEST(Variants, DensityVanishesTowardsTheHorizon) {

@@ -1,4 +1,5 @@
 // shimmer: measures the temporal stability of specular highlights.
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <new>
@@ -6,6 +7,10 @@
 #include "commands.h"
 
 int main(int argc, char** argv) {
+  // Past a file-size limit (ulimit -f), writes then fail with EFBIG and get
+  // the usual message and clean-up, instead of the signal killing the process
+  // with a half-written file.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"shimmer: temporal stability of specular highlights under camera motion"};
   app.require_subcommand(1);
   app.fallthrough(false);

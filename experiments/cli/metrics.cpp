@@ -120,7 +120,7 @@ void Run(const MetricsCliOptions& o) {
   else
     PrintText(report);
   // What was written goes to stderr, so that --json output stays one object.
-  if (video) std::fprintf(stderr, "shimmer: wrote %s\n", o.video.c_str());
+  if (video) std::fprintf(stderr, "shimmer: wrote %s (MP4, %s)\n", o.video.c_str(), video->fourcc_name());
   if (!o.out.empty()) std::fprintf(stderr, "shimmer: wrote maps, spectrum and metrics.json to %s\n", o.out.c_str());
 }
 

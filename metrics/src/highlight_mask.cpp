@@ -25,13 +25,6 @@ cv::Mat Dilate(const cv::Mat& mask, int radius) {
 
 }  // namespace
 
-cv::Mat HighlightMaskFromFrames(const std::vector<cv::Mat>& luminance, const HighlightMaskOptions& options) {
-  if (luminance.empty()) return cv::Mat();
-  cv::Mat mask = cv::Mat::zeros(luminance[0].size(), CV_8U);
-  for (const cv::Mat& y : luminance) AddAboveThreshold(y, options.threshold, mask);
-  return Dilate(mask, options.dilate_radius) / 255;
-}
-
 Result<cv::Mat> BuildHighlightMask(const ExrSequence& sequence, const HighlightMaskOptions& options) {
   const bool has_specular =
       std::find(sequence.layers.begin(), sequence.layers.end(), "specular") != sequence.layers.end();

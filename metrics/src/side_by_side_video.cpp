@@ -32,8 +32,9 @@ Result<std::unique_ptr<SideBySideVideo>> SideBySideVideo::Open(const std::filesy
                                                                int height, double fps, bool with_reference) {
   using R = Result<std::unique_ptr<SideBySideVideo>>;
   std::error_code ec;
-  if (!file.parent_path().empty()) std::filesystem::create_directories(file.parent_path(), ec);
-  if (ec) return R::Failure(file.parent_path().string() + ": cannot create directory (" + ec.message() + ")");
+  // A missing directory is the user's typo, not a tree to create.
+  if (!file.parent_path().empty() && !std::filesystem::is_directory(file.parent_path(), ec))
+    return R::Failure(file.string() + ": the directory " + file.parent_path().string() + " does not exist");
   std::unique_ptr<SideBySideVideo> video(new SideBySideVideo());
   video->file_ = file;
   video->temporary_ = TemporaryPathFor(file);

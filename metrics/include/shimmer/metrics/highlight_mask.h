@@ -28,7 +28,4 @@ struct HighlightMaskOptions {
 // pixels never switch a pixel on. CV_8U, 0/1.
 Result<cv::Mat> BuildHighlightMask(const ExrSequence& sequence, const HighlightMaskOptions& options);
 
-// The same on luminance frames already in memory (tests, callers with frames).
-cv::Mat HighlightMaskFromFrames(const std::vector<cv::Mat>& luminance, const HighlightMaskOptions& options);
-
 }  // namespace shimmer::metrics

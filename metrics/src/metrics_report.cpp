@@ -5,20 +5,12 @@
 
 #include <tbb/task_group.h>
 
-#include "shimmer/metrics/energy_bias.h"
-#include "shimmer/metrics/flicker_spectrum.h"
-#include "shimmer/metrics/temporal_sensitivity.h"
-#include "shimmer/metrics/temporal_variance.h"
-#include "shimmer/metrics/warp_error.h"
+#include "shimmer/metrics/metrics_accumulator.h"
 
 namespace shimmer::metrics {
 
 namespace {
 
-// relMSE's denominator offset: keeps near-black reference pixels from
-// dominating (the convention of the rendering literature's relMSE, e.g.
-// Rousselle et al. 2011, with 0.01 as in DESIGN.md).
-constexpr double kRelMseEpsilon = 0.01;
 constexpr int kDefaultSegmentLength = 64;
 
 struct FramePair {
@@ -26,31 +18,6 @@ struct FramePair {
 };
 
 std::string SizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
-
-// Per-row partial sums of one frame: rows are the unit of parallel work, so
-// summing them in row order afterwards keeps results independent of threading.
-struct RowSums {
-  double test = 0, reference = 0, error2 = 0, relative2 = 0;
-  long long samples = 0, non_finite = 0;
-};
-
-double MeanOver(const cv::Mat& map, const cv::Mat& mask, long long count) {
-  double sum = 0;
-  for (int y = 0; y < map.rows; ++y) {
-    const double* v = map.ptr<double>(y);
-    const uint8_t* m = mask.ptr<uint8_t>(y);
-    for (int x = 0; x < map.cols; ++x)
-      if (m[x]) sum += v[x];
-  }
-  return count ? sum / count : 0.0;
-}
-
-cv::Mat MaskedFloat(const cv::Mat& map, const cv::Mat& mask) {
-  cv::Mat out;
-  map.convertTo(out, CV_32F);
-  out.setTo(0, mask == 0);
-  return out;
-}
 
 }  // namespace
 
@@ -124,23 +91,17 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
                                 std::to_string(options.highlight.threshold) + " (lower --highlight-threshold)"
                           : "the mask " + options.mask_file->string() + " has no nonzero pixel");
 
-  std::vector<int> region_indices;
-  region_indices.reserve(region_pixels);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x)
-      if (region.at<uint8_t>(y, x)) region_indices.push_back(y * width + x);
-
-  const bool with_motion = test->has_motion;
-  TemporalMoments moments_test(width, height), moments_ref, moments_err;
-  if (has_ref) moments_ref = TemporalMoments(width, height), moments_err = TemporalMoments(width, height);
-  cv::Mat excluded = cv::Mat::zeros(height, width, CV_8U);  // sticky: a non-finite sample seen
-  cv::Mat diff_test = cv::Mat::zeros(height, width, CV_64F), diff_err;
-  if (has_ref) diff_err = cv::Mat::zeros(height, width, CV_64F);
-  cv::Mat signal_frame = cv::Mat::zeros(height, width, CV_32F);
-  FlickerSpectrum spectrum(region_indices, segment_length, test->fps);
-  WarpError warp;
-  std::vector<RowSums> rows(height);
-  std::string first_non_finite;
+  AccumulatorSetup setup;
+  setup.width = width;
+  setup.height = height;
+  setup.frames = frames;
+  setup.fps = test->fps;
+  setup.has_reference = has_ref;
+  setup.with_motion = test->has_motion;
+  setup.region = region;
+  setup.signal = signal;
+  setup.segment_length = segment_length;
+  MetricsAccumulator accumulator(setup);
 
   // The next frame pair is read (its chunks decoded in parallel) while this
   // one is computed. Both run as tasks of the one TBB pool that OpenCV's
@@ -148,12 +109,12 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
   // cores (measured 15 % slower on 2 cores than not overlapping at all).
   auto read = [&](int t) -> Result<FramePair> {
     FramePair pair;
-    auto tf = ReadFrame(test->frames[t], test->layer, width, height, with_motion);
-    if (!tf) return Result<FramePair>::Failure(tf.error());
+    auto tf = ReadFrame(test->frames[t], test->layer, width, height, setup.with_motion);
+    if (!tf) return tf.failure();
     pair.test = std::move(*tf);
     if (has_ref) {
       auto rf = ReadFrame(reference->frames[t], reference->layer, width, height, false);
-      if (!rf) return Result<FramePair>::Failure(rf.error());
+      if (!rf) return rf.failure();
       pair.reference = std::move(*rf);
     }
     return pair;
@@ -162,7 +123,7 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
   FramePair previous;
   Result<FramePair> current = read(0);
   for (int t = 0; t < frames; ++t) {
-    if (!current) return R::Failure(current.error());
+    if (!current) return current.failure();
     std::optional<Result<FramePair>> upcoming;
     tbb::task_group reading;
     // The read writes into `upcoming`; wait for it on every way out of this iteration.
@@ -173,151 +134,23 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
     if (t + 1 < frames) reading.run([&, t] { upcoming = read(t + 1); });
     const cv::Mat& T = current->test.luminance;
     const cv::Mat& Rf = current->reference.luminance;
-
-    cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& range) {
-      for (int y = range.start; y < range.end; ++y) {
-        const float* tv_row = T.ptr<float>(y);
-        const float* rv_row = has_ref ? Rf.ptr<float>(y) : nullptr;
-        const float* tp_row = t > 0 ? previous.test.luminance.ptr<float>(y) : nullptr;
-        const float* rp_row = t > 0 && has_ref ? previous.reference.luminance.ptr<float>(y) : nullptr;
-        const uint8_t* in = region.ptr<uint8_t>(y);
-        uint8_t* bad = excluded.ptr<uint8_t>(y);
-        float* sig = signal_frame.ptr<float>(y);
-        double* dt = diff_test.ptr<double>(y);
-        double* de = has_ref ? diff_err.ptr<double>(y) : nullptr;
-        RowSums sums;
-        for (int x = 0; x < width; ++x) {
-          if (!in[x]) continue;
-          const size_t i = static_cast<size_t>(y) * width + x;
-          const double tv = tv_row[x], rv = has_ref ? rv_row[x] : 0.0;
-          if (!std::isfinite(tv) || !std::isfinite(rv)) {
-            // Excluded and counted, never propagated: one NaN would otherwise
-            // turn every mean and the whole spectrum into NaN.
-            ++sums.non_finite;
-            bad[x] = 1;
-            sig[x] = 0;
-            continue;
-          }
-          const double e = tv - rv;
-          sums.test += tv;
-          sums.reference += rv;
-          sums.error2 += e * e;
-          sums.relative2 += e * e / (rv * rv + kRelMseEpsilon);
-          ++sums.samples;
-          if (bad[x]) {
-            sig[x] = 0;
-            continue;
-          }
-          moments_test.Add(i, tv);
-          if (has_ref) {
-            moments_ref.Add(i, rv);
-            moments_err.Add(i, e);
-          }
-          if (tp_row) {
-            dt[x] += std::abs(tv - tp_row[x]);
-            if (has_ref) de[x] += std::abs(e - (static_cast<double>(tp_row[x]) - rp_row[x]));
-          }
-          sig[x] = static_cast<float>(signal == FlickerSignal::kError ? e : tv);
-        }
-        rows[y] = sums;
-      }
-    });
-
-    RowSums frame_sums;
-    for (const RowSums& r : rows) {
-      frame_sums.test += r.test;
-      frame_sums.reference += r.reference;
-      frame_sums.error2 += r.error2;
-      frame_sums.relative2 += r.relative2;
-      frame_sums.samples += r.samples;
-      frame_sums.non_finite += r.non_finite;
-    }
-    if (frame_sums.non_finite > 0) {
-      report.nan_samples += frame_sums.non_finite;
-      if (first_non_finite.empty())
-        first_non_finite = !cv::checkRange(T) || !has_ref ? test->frames[t].string() : reference->frames[t].string();
-    }
-    if (has_ref && frame_sums.samples > 0) {
-      if (auto bias = RelativeBias(frame_sums.test, frame_sums.reference)) report.energy_bias_per_frame.push_back(*bias);
-      report.rmse_per_frame.push_back(std::sqrt(frame_sums.error2 / frame_sums.samples));
-      // relMSE is averaged the same way: per frame, then over frames.
-      report.relmse = report.relmse.value_or(0.0) + frame_sums.relative2 / frame_sums.samples;
-    }
-
-    spectrum.AddFrame(signal_frame, excluded);
-    if (with_motion && t > 0)
-      warp.AddFrame(previous.test.luminance, T, current->test.motion, region, excluded);
+    accumulator.AddFrame(T, Rf, current->test.motion, test->frames[t].string(),
+                         has_ref ? reference->frames[t].string() : std::string());
     if (observer) {
       Status s = observer(ObservedFrame{t, test->fps, has_ref, T, has_ref ? Rf : (t > 0 ? previous.test.luminance : T)});
-      if (!s) return R::Failure(s.error());
+      if (!s) return s.failure();
     }
     reading.wait();
     previous = std::move(*current);
     if (upcoming) current = std::move(*upcoming);
   }
 
-  // Pixels with any non-finite sample leave the region for every per-pixel
-  // metric, so that all of them describe the same set of pixels.
-  cv::Mat good = (region != 0) & (excluded == 0);
-  good /= 255;
-  const long long used = cv::countNonZero(good);
-  report.nan_pixels = region_pixels - used;
-  if (used == 0)
-    return R::Failure("every pixel of the region has NaN or Inf values (first in " + first_non_finite + ")");
-  if (report.nan_pixels > 0)
-    report.warnings.push_back(std::to_string(report.nan_pixels) + " pixel(s) have NaN/Inf values (" +
-                              std::to_string(report.nan_samples) + " samples, first in " + first_non_finite +
-                              "); excluded from the metrics");
-
   report.test = options.test.string();
   if (has_ref) report.reference = options.reference->string();
   report.layer = test->layer;
-  report.frames = frames;
-  report.width = width;
-  report.height = height;
-  report.pixels = region_pixels;
   report.fps = test->fps;
   report.fps_source = test->fps_source;
-  report.region_mask = good;
-
-  cv::Mat var_test = moments_test.VarianceMap();
-  report.tv_test = MeanOver(var_test, good, used);
-  report.tv_test_map = MaskedFloat(var_test, good);
-  report.temporal_diff_test = MeanOver(diff_test, good, used) / (frames - 1);
-  if (has_ref) {
-    cv::Mat var_ref = moments_ref.VarianceMap(), var_err = moments_err.VarianceMap();
-    report.tv_ref = MeanOver(var_ref, good, used);
-    report.tv_err = MeanOver(var_err, good, used);
-    report.tv_ref_map = MaskedFloat(var_ref, good);
-    report.tv_err_map = MaskedFloat(var_err, good);
-    if (*report.tv_ref > 0) report.tv_ratio = report.tv_test / *report.tv_ref;
-    cv::Mat mean_test = moments_test.MeanMap(), mean_ref = moments_ref.MeanMap();
-    // Every good pixel has all N samples, so sum_t = N * mean_t.
-    report.energy_bias = RelativeBias(MeanOver(mean_test, good, 1) * frames, MeanOver(mean_ref, good, 1) * frames);
-    report.energy_bias_map = EnergyBiasMap(mean_test, mean_ref, good, cv::Mat());
-    report.temporal_diff_err = MeanOver(diff_err, good, used) / (frames - 1);
-    double rmse = 0;
-    for (double r : report.rmse_per_frame) rmse += r;
-    if (!report.rmse_per_frame.empty()) {
-      report.rmse = rmse / report.rmse_per_frame.size();
-      report.relmse = *report.relmse / report.rmse_per_frame.size();
-    }
-    if (!report.tv_ratio) report.warnings.push_back("tv_ratio is undefined: the reference has zero temporal variance");
-    if (!report.energy_bias) report.warnings.push_back("energy_bias is undefined: the reference sums to zero");
-  }
-  if (with_motion && !warp.empty()) report.warp_err = warp.mean();
-
-  FlickerResult& f = report.flicker;
-  f.signal = signal == FlickerSignal::kError ? "error" : "test";
-  f.segment_length = segment_length;
-  f.segments = spectrum.segments();
-  f.freq_hz = spectrum.Frequencies();
-  f.psd = spectrum.Psd();
-  BandPowers bands = IntegrateBands(f.freq_hz, f.psd);
-  f.band_low = bands.low;
-  f.band_mid = bands.mid;
-  f.band_high = bands.high;
-  f.flicker_index = FlickerIndex(f.freq_hz, f.psd);
+  if (Status s = accumulator.Finish(&report); !s) return s.failure();
   return report;
 }
 

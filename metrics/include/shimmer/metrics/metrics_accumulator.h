@@ -1,0 +1,62 @@
+// The metrics of DESIGN.md "Metrics" accumulated frame by frame: per-pixel
+// temporal moments, frame differences, per-frame energy and error sums, the
+// spectrum's L-frame ring and the warp error. Frames come from anywhere: EXR
+// sequences (ComputeMetrics), or a renderer's frames in memory.
+#pragma once
+
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "shimmer/core/result.h"
+#include "shimmer/metrics/flicker_spectrum.h"
+#include "shimmer/metrics/metrics_report.h"
+#include "shimmer/metrics/temporal_variance.h"
+#include "shimmer/metrics/warp_error.h"
+
+namespace shimmer::metrics {
+
+struct AccumulatorSetup {
+  int width = 0, height = 0;
+  int frames = 0;  // how many AddFrame calls will come (the spectrum's segments depend on it)
+  double fps = 0;
+  bool has_reference = false;
+  bool with_motion = false;  // the test frames carry motion vectors (warp error)
+  cv::Mat region;            // CV_8U 0/1: the pixels measured
+  FlickerSignal signal = FlickerSignal::kTest;
+  int segment_length = 0;  // Welch segment, 2..frames
+};
+
+class MetricsAccumulator {
+ public:
+  explicit MetricsAccumulator(const AccumulatorSetup& setup);
+
+  // Frame t, in order: luminance planes (CV_32F), `reference` empty without a
+  // reference, `motion` (CV_32FC2) empty without motion. The sources name the
+  // frames in the warning about the first NaN or Inf.
+  void AddFrame(const cv::Mat& test, const cv::Mat& reference, const cv::Mat& motion, const std::string& test_source,
+                const std::string& reference_source = {});
+
+  // Writes every metric, map and flicker result into `report`, and its
+  // warnings; fails when every pixel of the region had a non-finite sample.
+  Status Finish(MetricsReport* report);
+
+ private:
+  AccumulatorSetup setup_;
+  std::vector<int> region_indices_;
+  long long region_pixels_ = 0;
+  TemporalMoments moments_test_, moments_ref_, moments_err_;
+  cv::Mat excluded_;  // sticky: a non-finite sample seen
+  cv::Mat diff_test_, diff_err_;
+  cv::Mat signal_frame_;
+  FlickerSpectrum spectrum_;
+  WarpError warp_;
+  cv::Mat previous_test_, previous_ref_;
+  int frames_added_ = 0;
+  long long nan_samples_ = 0;
+  std::string first_non_finite_;
+  std::vector<double> energy_bias_per_frame_, rmse_per_frame_;
+  double relmse_sum_ = 0;
+};
+
+}  // namespace shimmer::metrics

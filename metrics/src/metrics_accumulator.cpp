@@ -1,0 +1,217 @@
+#include "shimmer/metrics/metrics_accumulator.h"
+
+#include <cmath>
+
+#include "shimmer/metrics/energy_bias.h"
+#include "shimmer/metrics/temporal_sensitivity.h"
+
+namespace shimmer::metrics {
+
+namespace {
+
+// relMSE's denominator offset: keeps near-black reference pixels from
+// dominating (the convention of the rendering literature's relMSE, e.g.
+// Rousselle et al. 2011, with 0.01 as in shared/DESIGN.md "Metrics").
+constexpr double kRelMseEpsilon = 0.01;
+
+// Per-row partial sums of one frame: rows are the unit of parallel work, so
+// summing them in row order afterwards keeps results independent of threading.
+struct RowSums {
+  double test = 0, reference = 0, error2 = 0, relative2 = 0;
+  long long samples = 0, non_finite = 0;
+};
+
+double MeanOver(const cv::Mat& map, const cv::Mat& mask, long long count) {
+  double sum = 0;
+  for (int y = 0; y < map.rows; ++y) {
+    const double* v = map.ptr<double>(y);
+    const uint8_t* m = mask.ptr<uint8_t>(y);
+    for (int x = 0; x < map.cols; ++x)
+      if (m[x]) sum += v[x];
+  }
+  return count ? sum / count : 0.0;
+}
+
+cv::Mat MaskedFloat(const cv::Mat& map, const cv::Mat& mask) {
+  cv::Mat out;
+  map.convertTo(out, CV_32F);
+  out.setTo(0, mask == 0);
+  return out;
+}
+
+std::vector<int> RegionIndices(const cv::Mat& region) {
+  std::vector<int> indices;
+  for (int y = 0; y < region.rows; ++y)
+    for (int x = 0; x < region.cols; ++x)
+      if (region.at<uint8_t>(y, x)) indices.push_back(y * region.cols + x);
+  return indices;
+}
+
+}  // namespace
+
+MetricsAccumulator::MetricsAccumulator(const AccumulatorSetup& setup)
+    : setup_(setup),
+      region_indices_(RegionIndices(setup.region)),
+      region_pixels_(static_cast<long long>(region_indices_.size())),
+      moments_test_(setup.width, setup.height),
+      excluded_(cv::Mat::zeros(setup.height, setup.width, CV_8U)),
+      diff_test_(cv::Mat::zeros(setup.height, setup.width, CV_64F)),
+      signal_frame_(cv::Mat::zeros(setup.height, setup.width, CV_32F)),
+      spectrum_(region_indices_, setup.segment_length, setup.fps) {
+  if (setup.has_reference) {
+    moments_ref_ = TemporalMoments(setup.width, setup.height);
+    moments_err_ = TemporalMoments(setup.width, setup.height);
+    diff_err_ = cv::Mat::zeros(setup.height, setup.width, CV_64F);
+  }
+}
+
+void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv::Mat& motion,
+                                  const std::string& test_source, const std::string& reference_source) {
+  const bool has_ref = setup_.has_reference;
+  const int width = setup_.width, height = setup_.height;
+  const bool has_previous = frames_added_ > 0;
+  std::vector<RowSums> rows(height);
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& range) {
+    for (int y = range.start; y < range.end; ++y) {
+      const float* tv_row = T.ptr<float>(y);
+      const float* rv_row = has_ref ? Rf.ptr<float>(y) : nullptr;
+      const float* tp_row = has_previous ? previous_test_.ptr<float>(y) : nullptr;
+      const float* rp_row = has_previous && has_ref ? previous_ref_.ptr<float>(y) : nullptr;
+      const uint8_t* in = setup_.region.ptr<uint8_t>(y);
+      uint8_t* bad = excluded_.ptr<uint8_t>(y);
+      float* sig = signal_frame_.ptr<float>(y);
+      double* dt = diff_test_.ptr<double>(y);
+      double* de = has_ref ? diff_err_.ptr<double>(y) : nullptr;
+      RowSums sums;
+      for (int x = 0; x < width; ++x) {
+        if (!in[x]) continue;
+        const size_t i = static_cast<size_t>(y) * width + x;
+        const double tv = tv_row[x], rv = has_ref ? rv_row[x] : 0.0;
+        if (!std::isfinite(tv) || !std::isfinite(rv)) {
+          // Excluded and counted, never propagated: one NaN would otherwise
+          // turn every mean and the whole spectrum into NaN.
+          ++sums.non_finite;
+          bad[x] = 1;
+          sig[x] = 0;
+          continue;
+        }
+        const double e = tv - rv;
+        sums.test += tv;
+        sums.reference += rv;
+        sums.error2 += e * e;
+        sums.relative2 += e * e / (rv * rv + kRelMseEpsilon);
+        ++sums.samples;
+        if (bad[x]) {
+          sig[x] = 0;
+          continue;
+        }
+        moments_test_.Add(i, tv);
+        if (has_ref) {
+          moments_ref_.Add(i, rv);
+          moments_err_.Add(i, e);
+        }
+        if (tp_row) {
+          dt[x] += std::abs(tv - tp_row[x]);
+          if (has_ref) de[x] += std::abs(e - (static_cast<double>(tp_row[x]) - rp_row[x]));
+        }
+        sig[x] = static_cast<float>(setup_.signal == FlickerSignal::kError ? e : tv);
+      }
+      rows[y] = sums;
+    }
+  });
+
+  RowSums frame;
+  for (const RowSums& r : rows) {
+    frame.test += r.test;
+    frame.reference += r.reference;
+    frame.error2 += r.error2;
+    frame.relative2 += r.relative2;
+    frame.samples += r.samples;
+    frame.non_finite += r.non_finite;
+  }
+  if (frame.non_finite > 0) {
+    nan_samples_ += frame.non_finite;
+    if (first_non_finite_.empty()) first_non_finite_ = !has_ref || !cv::checkRange(T) ? test_source : reference_source;
+  }
+  if (has_ref && frame.samples > 0) {
+    if (auto bias = RelativeBias(frame.test, frame.reference)) energy_bias_per_frame_.push_back(*bias);
+    rmse_per_frame_.push_back(std::sqrt(frame.error2 / frame.samples));
+    // relMSE is averaged the same way: per frame, then over frames.
+    relmse_sum_ += frame.relative2 / frame.samples;
+  }
+  spectrum_.AddFrame(signal_frame_, excluded_);
+  if (setup_.with_motion && has_previous) warp_.AddFrame(previous_test_, T, motion, setup_.region, excluded_);
+  // The planes may be reused by the caller: keep copies for the differences.
+  T.copyTo(previous_test_);
+  if (has_ref) Rf.copyTo(previous_ref_);
+  ++frames_added_;
+}
+
+Status MetricsAccumulator::Finish(MetricsReport* report) {
+  const bool has_ref = setup_.has_reference;
+  const int frames = frames_added_;
+  // Pixels with any non-finite sample leave the region for every per-pixel
+  // metric, so that all of them describe the same set of pixels.
+  cv::Mat good = (setup_.region != 0) & (excluded_ == 0);
+  good /= 255;
+  const long long used = cv::countNonZero(good);
+  report->nan_samples = nan_samples_;
+  report->nan_pixels = region_pixels_ - used;
+  if (used == 0)
+    return Status::Failure("every pixel of the region has NaN or Inf values (first in " + first_non_finite_ + ")");
+  if (report->nan_pixels > 0)
+    report->warnings.push_back(std::to_string(report->nan_pixels) + " pixel(s) have NaN/Inf values (" +
+                               std::to_string(nan_samples_) + " samples, first in " + first_non_finite_ +
+                               "); excluded from the metrics");
+  report->frames = frames;
+  report->width = setup_.width;
+  report->height = setup_.height;
+  report->pixels = region_pixels_;
+  report->region_mask = good;
+  report->energy_bias_per_frame = energy_bias_per_frame_;
+  report->rmse_per_frame = rmse_per_frame_;
+
+  cv::Mat var_test = moments_test_.VarianceMap();
+  report->tv_test = MeanOver(var_test, good, used);
+  report->tv_test_map = MaskedFloat(var_test, good);
+  report->temporal_diff_test = MeanOver(diff_test_, good, used) / (frames - 1);
+  if (has_ref) {
+    cv::Mat var_ref = moments_ref_.VarianceMap(), var_err = moments_err_.VarianceMap();
+    report->tv_ref = MeanOver(var_ref, good, used);
+    report->tv_err = MeanOver(var_err, good, used);
+    report->tv_ref_map = MaskedFloat(var_ref, good);
+    report->tv_err_map = MaskedFloat(var_err, good);
+    if (*report->tv_ref > 0) report->tv_ratio = report->tv_test / *report->tv_ref;
+    cv::Mat mean_test = moments_test_.MeanMap(), mean_ref = moments_ref_.MeanMap();
+    // Every good pixel has all N samples, so sum_t = N * mean_t.
+    report->energy_bias =
+        RelativeBias(MeanOver(mean_test, good, 1) * frames, MeanOver(mean_ref, good, 1) * frames);
+    report->energy_bias_map = EnergyBiasMap(mean_test, mean_ref, good, cv::Mat());
+    report->temporal_diff_err = MeanOver(diff_err_, good, used) / (frames - 1);
+    if (!rmse_per_frame_.empty()) {
+      double rmse = 0;
+      for (double r : rmse_per_frame_) rmse += r;
+      report->rmse = rmse / rmse_per_frame_.size();
+      report->relmse = relmse_sum_ / rmse_per_frame_.size();
+    }
+    if (!report->tv_ratio)
+      report->warnings.push_back("tv_ratio is undefined: the reference has zero temporal variance");
+    if (!report->energy_bias) report->warnings.push_back("energy_bias is undefined: the reference sums to zero");
+  }
+  if (setup_.with_motion && !warp_.empty()) report->warp_err = warp_.mean();
+
+  FlickerResult& f = report->flicker;
+  f.signal = setup_.signal == FlickerSignal::kError ? "error" : "test";
+  f.segment_length = setup_.segment_length;
+  f.segments = spectrum_.segments();
+  f.freq_hz = spectrum_.Frequencies();
+  f.psd = spectrum_.Psd();
+  BandPowers bands = IntegrateBands(f.freq_hz, f.psd);
+  f.band_low = bands.low;
+  f.band_mid = bands.mid;
+  f.band_high = bands.high;
+  f.flicker_index = FlickerIndex(f.freq_hz, f.psd);
+  return Ok();
+}
+
+}  // namespace shimmer::metrics

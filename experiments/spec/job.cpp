@@ -95,7 +95,7 @@ std::vector<Job> ExpandJobs(const Spec& spec) {
 }
 
 std::string Fnv1a64Hex(std::string_view text) {
-  std::uint64_t h = 1469598103934665603ull;
+  std::uint64_t h = 14695981039346656037ull;  // the FNV-1a 64 offset basis
   for (unsigned char c : text) {
     h ^= c;
     h *= 1099511628211ull;
@@ -114,9 +114,11 @@ std::string ShadingCoreVersion() {
   return version;
 }
 
-std::string JobId(const Job& job) {
+std::string JobId(const Job& job) { return JobIdForCore(job, ShadingCoreVersion()); }
+
+std::string JobIdForCore(const Job& job, std::string_view core_version) {
   json j = job.ToJson();
-  j["core"] = ShadingCoreVersion();
+  j["core"] = core_version;
   // Defaults live in the C++ catalogue, not in the GLSL the core version
   // hashes: the id holds every parameter the variant reads, resolved, so a
   // default spelled out in a spec is the same job and a changed default is not.

@@ -11,7 +11,7 @@ namespace {
 
 // relMSE's denominator offset: keeps near-black reference pixels from
 // dominating (the convention of the rendering literature's relMSE, e.g.
-// Rousselle et al. 2011, with 0.01 as in shared/DESIGN.md "Metrics").
+// Rousselle et al. 2011, with 0.01 as docs/metrics.md defines it).
 constexpr double kRelMseEpsilon = 0.01;
 
 // Per-row partial sums of one frame: rows are the unit of parallel work, so

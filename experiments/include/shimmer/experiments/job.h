@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -47,6 +48,9 @@ std::vector<Job> ExpandJobs(const Spec& spec);
 // value the variant reads (defaults included) and the shading core's version.
 // Stable across runs and machines.
 std::string JobId(const Job& job);
+// The same for a given shading-core version: ids can be pinned by tests
+// without every GLSL edit changing the expected value.
+std::string JobIdForCore(const Job& job, std::string_view core_version);
 
 // The reference a job is measured against: shared by every variant and
 // derivative source of the same scene, material, camera, size and motion.

@@ -1,4 +1,4 @@
-// The metrics of DESIGN.md "Metrics" accumulated frame by frame: per-pixel
+// The metrics of docs/metrics.md accumulated frame by frame: per-pixel
 // temporal moments, frame differences, per-frame energy and error sums, the
 // spectrum's L-frame ring and the warp error. Frames come from anywhere: EXR
 // sequences (ComputeMetrics), or a renderer's frames in memory.

@@ -1,4 +1,4 @@
-// All metrics of DESIGN.md "Metrics" in one streaming pass over a test
+// All metrics of docs/metrics.md in one streaming pass over a test
 // sequence and an optional reference: one frame of each resident (plus the
 // previous one for differences), the spectrum's L-frame ring, per-pixel
 // accumulators; EXR reading of frame t+1 overlaps the computing of frame t.

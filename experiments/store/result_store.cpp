@@ -109,9 +109,11 @@ Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, 
   if (mode == Mode::kReadOnly && !std::filesystem::is_regular_file(path, ec))
     return R::Failure(path + ": no such results store");
   if (std::filesystem::is_directory(path, ec)) return R::Failure(path + ": is a directory, not a results store");
-  // Read-only opens by URI: mode=ro never creates or writes; on a read-only
-  // file system a WAL store cannot make its shared-memory file, and
-  // immutable=1 then reads it as the file it is.
+  // Read-only opens by URI. Without a -wal file no connection has the store
+  // open (a WAL connection keeps one), and immutable=1 reads the file as it
+  // is: no lock, no -shm or -wal created beside it, and it works on a
+  // read-only file system. With one, a runner may be writing: mode=ro reads
+  // through the WAL.
   auto open = [&](const std::string& uri, int flags) -> sqlite3* {
     sqlite3* db = nullptr;
     if (sqlite3_open_v2(uri.c_str(), &db, flags, nullptr) != SQLITE_OK) {
@@ -133,13 +135,8 @@ Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, 
   sqlite3* db = nullptr;
   if (mode == Mode::kReadOnly) {
     const int flags = SQLITE_OPEN_READONLY | SQLITE_OPEN_URI;
-    db = open("file:" + encoded + "?mode=ro", flags);
-    if (db && ExecOn(db, "SELECT count(*) FROM sqlite_master;")) {
-      // readable as it is
-    } else {
-      sqlite3_close(db);
-      db = open("file:" + encoded + "?immutable=1", flags);
-    }
+    const bool live = std::filesystem::exists(path + "-wal", ec);
+    db = open("file:" + encoded + (live ? "?mode=ro" : "?immutable=1"), flags);
   } else {
     db = open(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
   }

@@ -36,14 +36,33 @@ std::vector<shading::GlslFile> KernelFiles(bool user_variant, shading::GlslFile*
   return extra;
 }
 
-// glslang names the user's file by its include name; the user knows it by
-// the path they gave.
-std::string NameUserFile(std::string log, const std::string& user_file) {
-  for (std::size_t p = 0; (p = log.find(kUserVariantFile, p)) != std::string::npos;) {
-    log.replace(p, kUserVariantFile.size(), user_file);
-    p += user_file.size();
+constexpr const char* kUserVariantSignature =
+    "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p)";
+
+// One line from glslang's log ("ERROR: user_variant.glsl:2: 'x' : undeclared
+// identifier" and more): the first error, at the user's path as they gave
+// it. An error that glslang places in the kernel is at the call of
+// userVariant, so the file does not define it with the right signature.
+std::string UserVariantError(const std::string& log, const std::string& user_file) {
+  std::vector<std::string> errors;
+  for (std::size_t start = 0; start < log.size();) {
+    std::size_t end = log.find('\n', start);
+    if (end == std::string::npos) end = log.size();
+    std::string line = log.substr(start, end - start);
+    start = end + 1;
+    if (line.rfind("ERROR: ", 0) != 0 || line.find(" compilation errors") != std::string::npos) continue;
+    line = line.substr(7);
+    while (!line.empty() && line.back() == ' ') line.pop_back();
+    errors.push_back(line);
   }
-  return log;
+  if (errors.empty()) return user_file + ": does not compile as a variant";
+  std::string first = errors.front();
+  const std::string more = errors.size() > 1 ? " (and " + std::to_string(errors.size() - 1) + " more)" : "";
+  if (first.rfind(std::string(kUserVariantFile) + ":", 0) == 0)
+    return user_file + first.substr(kUserVariantFile.size()) + more;
+  auto colon = first.find(": ", first.find(':') + 1);
+  const std::string reason = colon == std::string::npos ? first : first.substr(colon + 2);
+  return user_file + ": must define " + kUserVariantSignature + " (glslang: " + reason + ")";
 }
 
 struct SpirvCache {
@@ -96,8 +115,7 @@ Result<std::shared_ptr<const shading::Spirv>> KernelSpirv(const std::string& use
   auto compiled = shading::CompileCompute(main, extra);
   if (!compiled) {
     if (!user) return Prefixed("render.comp does not compile", compiled.failure());
-    return Result<std::shared_ptr<const shading::Spirv>>::Failure(
-        user_file + ": does not compile as a variant:\n" + NameUserFile(compiled.error(), user_file));
+    return Result<std::shared_ptr<const shading::Spirv>>::Failure(UserVariantError(compiled.error(), user_file));
   }
   auto module = std::make_shared<const shading::Spirv>(std::move(*compiled));
   Modules().modules.emplace(key, module);

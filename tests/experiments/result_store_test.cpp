@@ -148,6 +148,8 @@ TEST(ResultStore, ReadOnlyOpenLeavesTheFileUntouched) {
   std::ifstream after_in(path, std::ios::binary);
   const std::string after((std::istreambuf_iterator<char>(after_in)), {});
   EXPECT_EQ(before, after);
+  EXPECT_FALSE(fs::exists(path + "-wal"));
+  EXPECT_FALSE(fs::exists(path + "-shm"));
   std::filesystem::permissions(path, std::filesystem::perms::owner_all, std::filesystem::perm_options::replace);
   EXPECT_FALSE(ResultStore::Open((dir.path / "missing.db").string(), ResultStore::Mode::kReadOnly));
   EXPECT_FALSE(std::filesystem::exists(dir.path / "missing.db"));

@@ -51,6 +51,20 @@ std::vector<Group> GroupRows(const std::vector<JobResult>& rows) {
   return out;
 }
 
+Costs CostsOf(const Group& group) {
+  Costs c;
+  for (const JobResult* r : group.rows) {
+    c.ms.push_back(r->gpu_ms_per_frame);
+    c.tv_err.push_back(Metric(r->metrics, "tv_err"));
+    c.relmse.push_back(Metric(r->metrics, "relmse"));
+  }
+  c.front_tv_err.assign(group.rows.size(), false);
+  c.front_relmse.assign(group.rows.size(), false);
+  for (int i : ParetoFront(c.ms, c.tv_err)) c.front_tv_err[i] = true;
+  for (int i : ParetoFront(c.ms, c.relmse)) c.front_relmse[i] = true;
+  return c;
+}
+
 }  // namespace report
 
 std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<double>& error) {

@@ -43,15 +43,8 @@ std::string Markdown(const std::vector<Group>& groups, const std::string& title,
         "`supersample-N` is the equal-time brute-force baseline. Rendered on: "
      << device_list << ". Raw rows: [report.csv](report.csv).\n\n";
   for (const Group& group : groups) {
-    std::vector<double> cost, err, rel;
-    for (const JobResult* r : group.rows) {
-      cost.push_back(r->gpu_ms_per_frame);
-      err.push_back(Metric(r->metrics, "tv_err"));
-      rel.push_back(Metric(r->metrics, "relmse"));
-    }
-    const std::vector<int> front = ParetoFront(cost, err);
-    const std::vector<int> front_rel = ParetoFront(cost, rel);
-    auto on = [](const std::vector<int>& f, std::size_t i) { return std::find(f.begin(), f.end(), int(i)) != f.end(); };
+    const Costs costs = CostsOf(group);
+    const std::vector<double>& err = costs.tv_err;
     const std::string slug = Slug(group.key);
     md << "## " << group.key << "\n\n![speed against tv_err](" << slug
        << "_pareto_tv_err.svg) ![speed against relmse](" << slug << "_pareto_relmse.svg) ![flicker spectra](" << slug
@@ -65,7 +58,7 @@ std::string Markdown(const std::vector<Group>& groups, const std::string& title,
          << Fmt(Metric(r.metrics, "tv_err")) << " | " << Fmt(Metric(r.metrics, "energy_bias"), "%+.3f") << " | "
          << Fmt(Metric(r.metrics, "temporal_diff_err")) << " | " << Fmt(Metric(r.metrics, "relmse")) << " | "
          << Fmt(FlickerIndex(r.metrics)) << " | " << Fmt(r.gpu_ms_per_frame, "%.2f") << " | "
-         << (on(front, i) ? "●" : "") << " | " << (on(front_rel, i) ? "●" : "") << " |\n";
+         << (costs.front_tv_err[i] ? "●" : "") << " | " << (costs.front_relmse[i] ? "●" : "") << " |\n";
       if (IsSupersample(r) || std::isnan(err[i])) continue;
       if (best_any < 0 || err[i] < err[best_any]) best_any = int(i);
       if (std::abs(Metric(r.metrics, "energy_bias")) <= kBiasTolerance && (best < 0 || err[i] < err[best]))

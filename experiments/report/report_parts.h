@@ -20,6 +20,14 @@ struct Group {
 };
 std::vector<Group> GroupRows(const std::vector<JobResult>& rows);
 
+// Speed against error for a group's rows, in its order, and which rows are
+// on the Pareto front of (ms per frame, tv_err) and of (ms per frame, relmse).
+struct Costs {
+  std::vector<double> ms, tv_err, relmse;
+  std::vector<bool> front_tv_err, front_relmse;
+};
+Costs CostsOf(const Group& group);
+
 // "variant name=value ...".
 std::string Label(const JobResult& row);
 // The metrics' region, e.g. "highlight" or "frame (highlight mask empty)".

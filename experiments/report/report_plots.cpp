@@ -23,33 +23,25 @@ constexpr const char* kTerminal = "set terminal svg size 900,560 dynamic noenhan
 
 std::vector<PlotFile> Plots(const Group& group) {
   const std::string slug = Slug(group.key);
-  std::vector<double> cost, err, rel;
-  for (const JobResult* r : group.rows) {
-    cost.push_back(r->gpu_ms_per_frame);
-    err.push_back(Metric(r->metrics, "tv_err"));
-    rel.push_back(Metric(r->metrics, "relmse"));
-  }
-  const std::vector<int> front = ParetoFront(cost, err);
-  const std::vector<int> front_rel = ParetoFront(cost, rel);
-  auto on = [](const std::vector<int>& f, std::size_t i) { return std::find(f.begin(), f.end(), int(i)) != f.end(); };
+  const Costs c = CostsOf(group);
 
   std::vector<PlotFile> files;
   // Data and scripts beside the SVGs, so users can restyle them.
   std::ostringstream pts;
-  pts << "# ms_per_frame tv_err relmse pareto_tv_err pareto_relmse label label_row\n";
+  pts << "# ms_per_frame tv_err relmse pareto_tv_err pareto_relmse label\n";
   for (std::size_t i = 0; i < group.rows.size(); ++i)
-    pts << cost[i] << " " << err[i] << " " << rel[i] << " " << on(front, i) << " " << on(front_rel, i) << " \""
-        << Label(*group.rows[i]) << "\" " << i % 3 << "\n";
+    pts << c.ms[i] << " " << c.tv_err[i] << " " << c.relmse[i] << " " << c.front_tv_err[i] << " "
+        << c.front_relmse[i] << " \"" << Label(*group.rows[i]) << "\"\n";
   pts << "\n\n# supersample-N curve\n";
   for (std::size_t i = 0; i < group.rows.size(); ++i)
     if (IsSupersample(*group.rows[i]))
-      pts << cost[i] << " " << err[i] << " " << rel[i] << " 0 0 \"" << group.rows[i]->job.variant << "\" 0\n";
+      pts << c.ms[i] << " " << c.tv_err[i] << " " << c.relmse[i] << " 0 0 \"" << group.rows[i]->job.variant << "\"\n";
   files.push_back({slug + "_pareto.dat", pts.str()});
   for (const auto& [metric, column] : {std::pair<std::string, int>{"tv_err", 2}, {"relmse", 3}}) {
     const std::string y = std::to_string(column), flag = std::to_string(column + 2);
     std::ostringstream ss;
-    // Only the front is labelled, each label on one of three rows of offsets:
-    // twenty labels on a cluster of points would cover each other.
+    // Only the front is labelled: twenty labels on a cluster of points
+    // would cover each other; the table names every point.
     ss << kTerminal << "set output '" << slug << "_pareto_" << metric << ".svg'\n"
        << "set title " << GnuplotString(group.key + ": speed against " + metric) << "\n"
        << "set xlabel 'GPU ms per frame'\nset ylabel '" << metric << "'\nset logscale y\nset key top right\n"

@@ -14,6 +14,11 @@
 #include <fstream>
 #include <thread>
 
+#include <sys/resource.h>
+
+#include <csignal>
+#include <functional>
+
 #include "shimmer/renderer/renderer.h"
 #include "test_hooks.h"
 #include "shimmer/renderer/scene.h"
@@ -393,6 +398,72 @@ TEST(GpuRender, RenderersSharingAPipelineKeepTheirOwnParameters) {
   // And as a renderer alone in a fresh process would (its own device).
   testing::ScopedTestHooks hooks({.lose_device_after_dispatches = 1000});  // a private device and pipeline
   EXPECT_TRUE(same(b1, RenderOne(b, 2)));
+}
+
+// Failures after sequence.json was first written leave it "failed" with the
+// error, never "running": a frame that cannot be written (a file-size limit,
+// as a full disk), and a preview that cannot be written.
+TEST(GpuSequence, WriteAndPreviewFailuresMarkTheSequenceFailed) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "shimmer_gpu_write_failure_test";
+  fs::remove_all(dir);
+  RenderSettings s = Settings("sphere", "none", DerivativeSource::kAnalytic, 32);
+  s.frames = 3;
+  s.compress_exr = false;  // 32 x 32 x 18 floats: 72 KiB a frame, past the limit below
+  struct rlimit saved;
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &saved), 0);
+  auto previous_handler = std::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit small = saved;
+  small.rlim_cur = 16 * 1024;  // sequence.json fits, a frame does not
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  auto rendered = RenderSequence(s, dir.string(), nullptr);
+  setrlimit(RLIMIT_FSIZE, &saved);
+  std::signal(SIGXFSZ, previous_handler);
+  ASSERT_FALSE(rendered);
+  EXPECT_EQ(rendered.code(), ErrorCode::kIo) << rendered.error();
+  EXPECT_NE(rendered.error().find("frame_0000.exr"), std::string::npos) << rendered.error();
+  auto seq = ReadSequenceFile(dir / "sequence.json");
+  ASSERT_TRUE(seq) << seq.error();
+  EXPECT_EQ(seq->status, SequenceStatus::kFailed);
+  EXPECT_EQ(seq->error, rendered.error());
+  EXPECT_TRUE(seq->frames.empty());
+  for (const auto& e : fs::directory_iterator(dir)) EXPECT_EQ(e.path().filename(), "sequence.json") << e.path();
+
+  fs::remove_all(dir);
+  const fs::path not_a_dir = fs::temp_directory_path() / "shimmer_gpu_preview_not_a_dir";
+  { std::ofstream(not_a_dir) << "x"; }
+  s.preview_png = (not_a_dir / "preview.png").string();
+  rendered = RenderSequence(s, dir.string(), nullptr);
+  ASSERT_FALSE(rendered);
+  EXPECT_NE(rendered.error().find("preview.png"), std::string::npos) << rendered.error();
+  seq = ReadSequenceFile(dir / "sequence.json");
+  ASSERT_TRUE(seq) << seq.error();
+  EXPECT_EQ(seq->status, SequenceStatus::kFailed);
+  EXPECT_EQ(seq->error, rendered.error());
+  fs::remove(not_a_dir);
+  fs::remove_all(dir);
+}
+
+// Settings refused before anything exists: no output directory is created.
+TEST(GpuSequence, RefusedSettingsCreateNothing) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "shimmer_gpu_refused_test" / "nested";
+  fs::remove_all(dir.parent_path());
+  RenderSettings s = Settings("sphere", "none", DerivativeSource::kAnalytic, 16);
+  for (auto change : std::vector<std::function<void(RenderSettings&)>>{
+           [](RenderSettings& r) { r.frames = 0; }, [](RenderSettings& r) { r.width = 0; },
+           [](RenderSettings& r) { r.max_rounds = 0; }, [](RenderSettings& r) { r.max_rounds = -1; },
+           [](RenderSettings& r) { r.fps = std::nan(""); }, [](RenderSettings& r) { r.variant = "supersample-99999999999"; },
+           [](RenderSettings& r) { r.variant = "tk19", r.param_overrides = {{"sigma2", -5}}; },
+           [](RenderSettings& r) { r.variant_file = "/nonexistent/user.glsl", r.param_overrides = {{"fp_max", std::nan("")}}; },
+           [](RenderSettings& r) { r.reference_spp = 65; }}) {
+    RenderSettings bad = s;
+    change(bad);
+    auto rendered = RenderSequence(bad, dir.string(), nullptr);
+    ASSERT_FALSE(rendered);
+    EXPECT_EQ(rendered.code(), ErrorCode::kBadInput) << rendered.error();
+    EXPECT_FALSE(fs::exists(dir.parent_path())) << rendered.error();
+  }
 }
 
 // A device lost mid-sequence (injected: lavapipe never loses its device)

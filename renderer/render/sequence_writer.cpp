@@ -123,7 +123,9 @@ SequenceFile Describe(const RenderSettings& settings, const Renderer& renderer) 
                 rig.fov_y_deg};
   seq.variant = v.name;
   for (const auto& [k, x] : v.shown_params) seq.params[k] = x;
-  seq.derivatives = v.spp_n > 1 ? "analytic" : std::string(shading::DerivativeSourceName(settings.derivatives));
+  // Supersampled pixels never read a derivative; their footprint is the analytic one.
+  seq.derivatives = std::string(
+      shading::DerivativeSourceName(v.spp_n > 1 ? shading::DerivativeSource::kAnalytic : settings.derivatives));
   seq.width = settings.width;
   seq.height = settings.height;
   seq.fps = settings.fps;

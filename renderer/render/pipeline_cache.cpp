@@ -1,8 +1,10 @@
 #include "pipeline_cache.h"
 
+#include <cctype>
 #include <chrono>
 #include <map>
 #include <mutex>
+#include <sstream>
 #include <string_view>
 #include <tuple>
 
@@ -36,14 +38,44 @@ std::vector<shading::GlslFile> KernelFiles(bool user_variant, shading::GlslFile*
   return extra;
 }
 
-// glslang names the user's file by its include name; the user knows it by
-// the path they gave.
-std::string NameUserFile(std::string log, const std::string& user_file) {
-  for (std::size_t p = 0; (p = log.find(kUserVariantFile, p)) != std::string::npos;) {
-    log.replace(p, kUserVariantFile.size(), user_file);
-    p += user_file.size();
+constexpr std::string_view kUserVariantSignature =
+    "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p)";
+
+// A compile failure of the user's variant file as one line. glslang's log has
+// a line per error ("ERROR: user_variant.glsl:2: 'x' : undeclared identifier",
+// then "ERROR: 2 compilation errors. ..."); the first one says it, under the
+// name the user gave the file. An error inside the kernel means the file did
+// not define what the kernel calls: that is the user's file too, and the
+// kernel's line numbers would mean nothing to them.
+std::string UserVariantError(const std::string& log, const std::string& user_file) {
+  std::vector<std::string> errors;
+  std::istringstream lines(log);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("ERROR: ", 0) != 0) continue;
+    line.erase(0, 7);
+    if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) continue;  // "N compilation errors"
+    while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.pop_back();
+    errors.push_back(line);
   }
-  return log;
+  if (errors.empty()) return user_file + ": does not compile as a variant";
+  // "<file>:<line>: '<token>' : <problem>"; the token is often empty.
+  std::string first = errors.front(), where, problem = first;
+  if (auto colon = first.find(": '"); colon != std::string::npos) {
+    where = first.substr(0, colon);
+    problem = first.substr(colon + 2);
+    if (auto sep = problem.find("' :"); sep != std::string::npos) {
+      const std::string token = problem.substr(1, sep - 1);
+      std::string text = problem.substr(sep + 3);
+      text.erase(0, text.find_first_not_of(' '));
+      problem = token.empty() ? text : "'" + token + "': " + text;
+    }
+  }
+  const std::string more =
+      errors.size() > 1 ? " (and " + std::to_string(errors.size() - 1) + " more compile errors)" : "";
+  if (where.rfind(kUserVariantFile, 0) == 0)
+    return user_file + where.substr(kUserVariantFile.size()) + ": " + problem + more;
+  return user_file + ": does not define " + std::string(kUserVariantSignature) + " (the kernel's call fails: " +
+         problem + ")";
 }
 
 struct SpirvCache {
@@ -96,8 +128,7 @@ Result<std::shared_ptr<const shading::Spirv>> KernelSpirv(const std::string& use
   auto compiled = shading::CompileCompute(main, extra);
   if (!compiled) {
     if (!user) return Prefixed("render.comp does not compile", compiled.failure());
-    return Result<std::shared_ptr<const shading::Spirv>>::Failure(
-        user_file + ": does not compile as a variant:\n" + NameUserFile(compiled.error(), user_file));
+    return Result<std::shared_ptr<const shading::Spirv>>::Failure(UserVariantError(compiled.error(), user_file));
   }
   auto module = std::make_shared<const shading::Spirv>(std::move(*compiled));
   Modules().modules.emplace(key, module);

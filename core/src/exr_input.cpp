@@ -149,6 +149,19 @@ Result<ExrInput> ExrInput::Open(const fs::path& file, bool whole_file) {
     part.min_y = window.min.y;
     part.width = window.max.x - window.min.x + 1;
     part.height = window.max.y - window.min.y + 1;
+    // Every chunk has an 8-byte entry in the offset table: a data window
+    // that needs more chunks than the file has bytes for is a damaged (or
+    // forged) header, and believing it would mean planes of gigabytes.
+    int32_t chunks = 0;
+    if (exr_get_chunk_count(context.exr, p, &chunks) != EXR_ERR_SUCCESS || chunks <= 0)
+      return R::Failure(Unreadable(file, "its header gives no chunk count"));
+    std::error_code ec;
+    const std::uint64_t size = whole_file ? context.bytes.size() : fs::file_size(file, ec);
+    if (!ec && std::uint64_t(chunks) * 8 > size)
+      return R::Failure(Unreadable(file, "its header's " + std::to_string(part.width) + "x" +
+                                             std::to_string(part.height) + " data window needs " +
+                                             std::to_string(chunks) + " chunks, more than its " +
+                                             std::to_string(size) + " bytes can hold"));
     for (int c = 0; c < channels->num_channels; ++c) {
       const exr_attr_chlist_entry_t& e = channels->entries[c];
       part.channels.push_back({std::string(e.name.str, e.name.length), e.x_sampling, e.y_sampling});

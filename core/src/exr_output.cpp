@@ -63,8 +63,14 @@ Status WriteExr(const fs::path& file, int width, int height, const std::vector<E
   } catch (const std::exception& e) {
     std::error_code ec;
     fs::remove(temporary, ec);
-    // OpenEXR's text carries the system's reason ("No space left on device").
-    return Status::Failure(file.string() + ": cannot write EXR (" + e.what() + ")", ErrorCode::kIo);
+    // OpenEXR's text carries the system's reason: 'Failed to write pixel data
+    // to image file "<temporary>". No space left on device.' The user knows
+    // no temporary name, only the reason.
+    std::string why = e.what();
+    const std::string named = "\"" + temporary.string() + "\". ";
+    if (auto at = why.find(named); at != std::string::npos) why = why.substr(at + named.size());
+    if (!why.empty() && why.back() == '.') why.pop_back();
+    return Status::Failure(file.string() + ": cannot write EXR (" + why + ")", ErrorCode::kIo);
   }
   return CommitFile(temporary, file);
 }

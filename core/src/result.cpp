@@ -8,6 +8,7 @@ const char* ErrorCodeName(ErrorCode code) {
     case ErrorCode::kIo: return "I/O error";
     case ErrorCode::kDeviceLost: return "device lost";
     case ErrorCode::kOutOfMemory: return "out of memory";
+    case ErrorCode::kBusy: return "busy";
     case ErrorCode::kInternal: return "internal error";
   }
   return "internal error";

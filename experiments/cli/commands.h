@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -46,14 +47,38 @@ inline void Check(const Status& status, const FieldFlags& fields = {}) {
 // Refuses to create an output file in a directory that does not exist: the
 // user's typo would otherwise become a tree of new directories.
 void RequireParentDirectory(const std::string& option, const std::string& path);
+// For an output directory created with its parents: a file in the way is bad
+// input, a directory the user may not write to an I/O error, both before the work.
+void RequireCreatableDirectory(const std::string& option, const std::string& path);
+
+// The directories a command creates for its outputs. Unless Keep() is called
+// (the command succeeded), the destructor removes those still empty, deepest
+// first: a command that fails leaves no empty directory behind. With
+// `with_contents`, it removes them with whatever the command put in them.
+class NewDirectories {
+ public:
+  explicit NewDirectories(bool with_contents = false) : with_contents_(with_contents) {}
+  NewDirectories(const NewDirectories&) = delete;
+  NewDirectories& operator=(const NewDirectories&) = delete;
+  ~NewDirectories();
+  // Creates `dir` and its missing parents, or throws a CommandError starting
+  // with `what` (e.g. "--work x/y"): bad input when a file is in the way,
+  // else an I/O error.
+  void Create(const std::string& what, const std::filesystem::path& dir);
+  void Keep() { created_.clear(); }
+
+ private:
+  std::vector<std::filesystem::path> created_;  // in creation order, parents first
+  bool with_contents_;
+};
 
 // "--param name=value" as a (name, value) pair; UsageError for anything else.
 std::pair<std::string, double> ParseParamOption(const std::string& text);
 
 // Fills db_path and work_dir: the given paths, else runs/<spec>/<db_file> and
-// runs/<spec>/frames; creates their directories (UsageError when it cannot).
+// runs/<spec>/frames; creates their directories in `dirs`.
 void StorePaths(const std::string& spec_name, const std::string& db, const std::string& work,
-                const std::string& db_file, experiments::RunOptions* ro);
+                const std::string& db_file, experiments::RunOptions* ro, NewDirectories* dirs);
 
 void AddVariantsCommand(CLI::App& app);
 void AddNdfCommand(CLI::App& app);

@@ -21,8 +21,12 @@ struct FitCliOptions {
 void Run(const FitCliOptions& o) {
   const experiments::Spec spec = Take(experiments::LoadSpec(o.spec));
   if (spec.fits.empty()) throw UsageError(o.spec + ": the spec has no \"fit\" section");
+  // Found before the fits: the report would be lost after hours of renders.
+  const std::string out = o.out.empty() ? (std::filesystem::path("results") / spec.name).string() : o.out;
+  RequireCreatableDirectory(o.out.empty() ? "the report directory" : "--out", out);
   experiments::RunOptions ro;
-  StorePaths(spec.name, o.db, o.work, "fit.db", &ro);
+  NewDirectories dirs;
+  StorePaths(spec.name, o.db, o.work, "fit.db", &ro, &dirs);
   ro.keep_frames = o.keep_frames;
   ro.device = o.device;
   // Results on stdout, progress on stderr: `shimmer fit spec.json > fits.txt` keeps the answers.
@@ -30,6 +34,7 @@ void Run(const FitCliOptions& o) {
       spec, ro, [](const std::string& line) { std::printf("%s\n", line.c_str()), std::fflush(stdout); },
       [](const std::string& line) { std::fprintf(stderr, "shimmer: %s\n", line.c_str()); });
   if (outcome.error) throw CommandError(*outcome.error);
+  dirs.Keep();
   for (const experiments::FitLaw& l : outcome.laws) {
     std::printf("%s, %s materials: %s(alpha) = %.4g * alpha^%.4g; log residuals:", l.variant.c_str(), l.ndf.c_str(),
                 l.param.c_str(), l.law.a, l.law.b);
@@ -37,7 +42,6 @@ void Run(const FitCliOptions& o) {
       std::printf(" %s %+.3f", l.materials[i].c_str(), l.law.residuals[i]);
     std::printf("\n");
   }
-  const std::string out = o.out.empty() ? (std::filesystem::path("results") / spec.name).string() : o.out;
   std::vector<std::string> warnings;
   Check(experiments::WriteFitReport(outcome, spec, out, &warnings));
   for (const std::string& w : warnings) std::fprintf(stderr, "shimmer: warning: %s\n", w.c_str());

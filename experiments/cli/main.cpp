@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <exception>
 #include <new>
+#include <string>
 
 #include "commands.h"
 
@@ -26,6 +27,18 @@ int main(int argc, char** argv) {
   using shimmer::cli::kExitBadInput;
   using shimmer::cli::kExitFailure;
   try {
+    // CLI11 would call "shimmer rendr" a missing subcommand; the user typed one.
+    if (argc > 1 && argv[1][0] != '-') {
+      std::string names;
+      bool known = false;
+      for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+        known = known || sub->get_name() == argv[1];
+        names += (names.empty() ? "" : ", ") + sub->get_name();
+      }
+      if (!known)
+        throw shimmer::cli::UsageError("unknown subcommand '" + std::string(argv[1]) + "' (one of " + names +
+                                       "; see shimmer --help)");
+    }
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);

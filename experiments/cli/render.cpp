@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <filesystem>
 
 #include "commands.h"
 #include "shimmer/renderer/renderer.h"
@@ -93,9 +94,23 @@ void Run(const RenderOptions& o, const CLI::App& cmd) {
   s.device = o.device;
   s.preview_png = o.preview;
   if (!o.preview.empty()) RequireParentDirectory("--preview", o.preview);
+  // The outermost directory of --out that the render would create.
+  std::error_code ec;
+  std::filesystem::path created;
+  for (std::filesystem::path p = o.out; !p.empty() && !std::filesystem::exists(p, ec) && p != p.parent_path();
+       p = p.parent_path())
+    created = p;
+  const bool preview_existed = !o.preview.empty() && std::filesystem::exists(o.preview, ec);
   const bool tty = isatty(fileno(stderr));
-  const SequenceFile seq =
-      Take(render::RenderSequence(s, o.out, tty ? PrintProgress : std::function<void(int, int)>()), kRenderFlags);
+  auto rendered = render::RenderSequence(s, o.out, tty ? PrintProgress : std::function<void(int, int)>());
+  if (!rendered) {
+    // A sequence this command began and could not finish is not left behind,
+    // nor its preview. (Rendered into a directory that was there, the frames
+    // before the failure stay, and sequence.json says "failed" and why.)
+    if (!created.empty()) std::filesystem::remove_all(created, ec);
+    if (!o.preview.empty() && !preview_existed) std::filesystem::remove(o.preview, ec);
+  }
+  const SequenceFile seq = Take(std::move(rendered), kRenderFlags);
   std::printf("%d frames of %s (%s, %s) at %dx%d in %s: %.2f ms/frame on %s\n", s.frames, s.scene.name.c_str(),
               seq.camera.path.c_str(), seq.variant.c_str(), s.width, s.height, o.out.c_str(), seq.MeanGpuMs(),
               seq.device.c_str());

@@ -16,6 +16,7 @@ void AddReportCommand(CLI::App& app) {
   cmd->add_option("-o,--output", *out, "Report directory, e.g. results/quick")->required();
   cmd->add_option("--title", *title, "Heading of report.md")->capture_default_str();
   cmd->callback([db, out, title] {
+    RequireCreatableDirectory("--output", *out);
     auto store = Take(experiments::ResultStore::Open(*db, experiments::ResultStore::Mode::kReadOnly));
     const auto rows = Take(store->All());
     if (rows.empty()) throw UsageError(*db + ": the results store has no finished jobs");

@@ -49,7 +49,8 @@ void Run(const RunCliOptions& o) {
   if (!experiments::ParseShard(o.shard, &ro.shard_index, &ro.shard_count))
     throw UsageError("--shard must be i/n with 0 <= i < n, got '" + o.shard + "'");
   if (o.jobs < 1 || o.jobs > 64) throw UsageError("--jobs must be between 1 and 64, got " + std::to_string(o.jobs));
-  StorePaths(spec.name, o.db, o.work, "results.db", &ro);
+  NewDirectories dirs;
+  StorePaths(spec.name, o.db, o.work, "results.db", &ro, &dirs);
   ro.keep_frames = o.keep_frames;
   ro.jobs = o.jobs;
   ro.device = o.device;
@@ -58,6 +59,7 @@ void Run(const RunCliOptions& o) {
   const auto jobs = experiments::ExpandJobs(spec);
   const experiments::RunSummary s = experiments::RunJobs(jobs, ro);
   if (s.error) throw CommandError(*s.error);
+  dirs.Keep();
   std::printf("%s: %d jobs in shard %s (%d computed, %d already done) -> %s\n", spec.name.c_str(), s.total,
               o.shard.c_str(), s.computed, s.skipped, ro.db_path.c_str());
 }
@@ -65,16 +67,14 @@ void Run(const RunCliOptions& o) {
 }  // namespace
 
 void StorePaths(const std::string& spec_name, const std::string& db, const std::string& work,
-                const std::string& db_file, experiments::RunOptions* ro) {
+                const std::string& db_file, experiments::RunOptions* ro, NewDirectories* dirs) {
   const std::filesystem::path base = std::filesystem::path("runs") / spec_name;
   ro->db_path = db.empty() ? (base / db_file).string() : db;
   ro->work_dir = work.empty() ? (base / "frames").string() : work;
   const std::filesystem::path db_dir = std::filesystem::path(ro->db_path).parent_path();
-  std::error_code ec;
-  std::filesystem::create_directories(db_dir.empty() ? "." : db_dir, ec);
-  if (ec) throw UsageError(db_dir.string() + ": cannot create the store's directory: " + ec.message());
-  std::filesystem::create_directories(ro->work_dir, ec);
-  if (ec) throw UsageError(ro->work_dir + ": cannot create the frame directory: " + ec.message());
+  // The user's flag when they gave the path; the path alone when it is the default.
+  if (!db_dir.empty()) dirs->Create(db.empty() ? ro->db_path : "--db " + db, db_dir);
+  dirs->Create(work.empty() ? ro->work_dir : "--work " + work, ro->work_dir);
 }
 
 void AddRunCommand(CLI::App& app) {

@@ -1,5 +1,6 @@
 // `shimmer sweep`: one variant parameter over a range, everything else fixed;
 // prints a table, and writes it as CSV with a gnuplot script and plot.
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -7,7 +8,6 @@
 
 #include "commands.h"
 #include "shimmer/experiments/job.h"
-#include "shimmer/core/atomic_file.h"
 #include "shimmer/core/gnuplot.h"
 #include "shimmer/experiments/csv.h"
 #include "shimmer/experiments/output_files.h"
@@ -59,10 +59,18 @@ experiments::Spec SweepSpec(const SweepOptions& o, std::string* name) {
   auto parsed = experiments::ParseSpec(spec.dump(), "sweep");
   if (parsed) return *parsed;
   // "sweep:1: size: must be ..." names the spec's key; the user typed a flag.
+  // The line is there only when the key is ("fp_max.steps" is not).
   std::string message = parsed.error();
-  for (int colons = 0; colons < 2 && !message.empty();) colons += message.front() == ':', message.erase(0, 1);
+  if (message.rfind("sweep:", 0) == 0) message.erase(0, 6);
+  if (!message.empty() && std::isdigit(static_cast<unsigned char>(message.front()))) {
+    while (!message.empty() && std::isdigit(static_cast<unsigned char>(message.front()))) message.erase(0, 1);
+    if (!message.empty() && message.front() == ':') message.erase(0, 1);
+  }
   if (!message.empty() && message.front() == ' ') message.erase(0, 1);
-  const FieldFlags keys = {{"size:", "--size:"},
+  const FieldFlags keys = {{*name + ".steps:", "--param " + o.param + ": steps"},
+                           {*name + ".from:", "--param " + o.param + ": from"},
+                           {*name + ".to:", "--param " + o.param + ": to"},
+                           {"size:", "--size:"},
                            {"frames:", "--frames:"},
                            {"fps:", "--fps:"},
                            {"spp:", "--reference-spp:"},
@@ -83,9 +91,9 @@ void Run(const SweepOptions& o) {
   experiments::RunOptions ro;
   ro.work_dir = o.work;
   ro.device = o.device;
-  std::error_code ec;
-  std::filesystem::create_directories(o.work, ec);
-  if (ec) throw UsageError("--work " + o.work + ": cannot create the directory (" + ec.message() + ")");
+  // A frame cache this sweep made goes with a sweep that fails; one that was there stays.
+  NewDirectories dirs(/*with_contents=*/true);
+  dirs.Create("--work " + o.work, o.work);
   experiments::CsvTable csv({name, "tv_ratio", "tv_err", "energy_bias", "relmse", "flicker_index", "ms_per_frame"});
   bool header = false;
   for (const experiments::Job& job : experiments::ExpandJobs(spec)) {
@@ -109,9 +117,14 @@ void Run(const SweepOptions& o) {
                 experiments::CsvNumber(bias), experiments::CsvNumber(relmse), experiments::CsvNumber(fi),
                 experiments::CsvNumber(result.gpu_ms_per_frame)});
   }
-  if (o.csv.empty()) return;
+  if (o.csv.empty()) return dirs.Keep();
   const std::filesystem::path path(o.csv);
-  Check(WriteFileAtomic(path, csv.Text()));
+  // The table, its script and its plot appear together or not at all.
+  auto staged = Take(experiments::StagedDirectory::Create(path.parent_path()));
+  auto check = [&staged](const Status& s) {
+    if (!s) throw CommandError(staged->Unstaged(s.failure()));
+  };
+  check(staged->Write(path.filename().string(), csv.Text()));
   // The plot script sits beside the data so users can restyle it.
   std::filesystem::path gp = path, svg = path;
   gp.replace_extension(".gp");
@@ -126,8 +139,15 @@ void Run(const SweepOptions& o) {
       << "'' using 1:4 axes x1y2 with linespoints\n";
     return s.str();
   };
-  const auto warning = Take(WritePlot(path.parent_path(), gp.filename().string(), svg.filename().string(), script));
-  if (warning) std::fprintf(stderr, "shimmer: warning: %s\n", warning->c_str());
+  auto plotted = WritePlot(staged->staging(), gp.filename().string(), svg.filename().string(), script);
+  if (!plotted) throw CommandError(staged->Unstaged(plotted.failure()));
+  const std::optional<std::string> warning = *plotted;
+  check(staged->Commit(path.filename().string()));
+  dirs.Keep();
+  if (warning) {
+    const std::string text = staged->Unstaged(Error{ErrorCode::kInternal, *warning}).message;
+    std::fprintf(stderr, "shimmer: warning: %s\n", text.c_str());
+  }
   std::printf("wrote %s, %s%s\n", path.c_str(), gp.c_str(), warning ? "" : (", " + svg.string()).c_str());
 }
 

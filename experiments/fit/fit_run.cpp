@@ -166,6 +166,7 @@ FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::funct
   }
   auto opened = ResultStore::Open(options.db_path);
   if (!opened) {
+    (*lock)->Discard();
     outcome.error = opened.failure();
     return outcome;
   }

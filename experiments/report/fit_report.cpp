@@ -125,7 +125,11 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
     scripts.push_back(slug + ".gp");
   }
   for (const std::string& script : scripts)
-    if (Status s = RunGnuplot(out.staging(), script); !s && warnings) warnings->push_back(s.error());
+    if (Status s = RunGnuplot(out.staging(), script); !s) {
+      // gnuplot missing or failing costs the plots; a plot cut short (a full disk) fails the report.
+      if (s.code() == ErrorCode::kIo) return out.Unstaged(s.failure());
+      if (warnings) warnings->push_back(s.error());
+    }
   if (Status s = out.Write("fit.md", md.str()); !s) return s;
   return out.Commit("fit.md");
 }

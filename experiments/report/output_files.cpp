@@ -17,24 +17,40 @@ Result<std::unique_ptr<StagedDirectory>> StagedDirectory::Create(const fs::path&
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
     return R::Failure(out.string() + ": exists and is not a directory");
-  const bool created = !fs::exists(out, ec);
-  fs::create_directories(out, ec);
-  if (ec) return R::Failure(out.string() + ": cannot create the directory (" + ec.message() + ")", ErrorCode::kIo);
+  // `out` and each missing parent, deepest first: removed again unless committed.
+  std::vector<fs::path> created;
+  for (fs::path p = out; !p.empty() && !fs::exists(p, ec) && p != p.parent_path(); p = p.parent_path())
+    created.push_back(p);
+  auto remove_created = [&created] {
+    std::error_code ignored;
+    for (const fs::path& p : created) fs::remove(p, ignored);  // only when empty
+  };
+  // "" is the working directory, and names its files without a "./".
+  ec.clear();
+  if (!out.empty()) fs::create_directories(out, ec);
+  if (ec) {
+    remove_created();
+    // A file where a directory should be is the user's path; anything else (permissions, space) is the system.
+    const ErrorCode code = ec == std::errc::not_a_directory || ec == std::errc::file_exists ? ErrorCode::kBadInput
+                                                                                             : ErrorCode::kIo;
+    return R::Failure(out.string() + ": cannot create the directory (" + ec.message() + ")", code);
+  }
   static std::atomic<int> counter{0};
   const fs::path staging =
       out / (".staging-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1)));
   fs::create_directory(staging, ec);
   if (ec) {
-    if (created) fs::remove(out, ec);
+    remove_created();
     return R::Failure(out.string() + ": cannot write into the directory (" + ec.message() + ")", ErrorCode::kIo);
   }
-  return std::unique_ptr<StagedDirectory>(new StagedDirectory(out, staging, created));
+  return std::unique_ptr<StagedDirectory>(new StagedDirectory(out, staging, std::move(created)));
 }
 
 StagedDirectory::~StagedDirectory() {
   std::error_code ec;
   fs::remove_all(staging_, ec);
-  if (!committed_ && created_out_) fs::remove(out_, ec);  // only when empty
+  if (!committed_)
+    for (const fs::path& p : created_) fs::remove(p, ec);  // only when empty
 }
 
 Status StagedDirectory::Write(const std::string& name, std::string_view text) {
@@ -57,6 +73,15 @@ Status StagedDirectory::Commit(const std::string& last) {
   }
   committed_ = true;
   return Ok();
+}
+
+Error StagedDirectory::Unstaged(const Error& error) const {
+  Error out = error;
+  std::string staged = staging_.string(), final_dir = out_.string();
+  if (final_dir.empty()) staged += "/";
+  for (std::size_t p = 0; (p = out.message.find(staged, p)) != std::string::npos; p += final_dir.size())
+    out.message.replace(p, staged.size(), final_dir);
+  return out;
 }
 
 std::string Slug(const std::string& s) {

@@ -93,7 +93,11 @@ Status WriteReport(const std::vector<JobResult>& rows, const std::string& title,
       if (f.script) scripts.push_back(f.name);
     }
   for (const std::string& script : scripts)
-    if (Status s = RunGnuplot(dir.staging(), script); !s && warnings) warnings->push_back(s.error());
+    if (Status s = RunGnuplot(dir.staging(), script); !s) {
+      // gnuplot missing or failing costs the plots; a plot cut short (a full disk) fails the report.
+      if (s.code() == ErrorCode::kIo) return dir.Unstaged(s.failure());
+      if (warnings) warnings->push_back(s.error());
+    }
   if (Status s = dir.Write("report.md", report::Markdown(groups, title, rows.size())); !s) return s;
   return dir.Commit("report.md");
 }

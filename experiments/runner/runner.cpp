@@ -153,6 +153,10 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
   const bool store_existed = fs::exists(options.db_path, exists_ec);
   auto opened = ResultStore::Open(options.db_path);
   if (!opened) {
+    std::error_code ec;
+    if (!store_existed)
+      for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(options.db_path + suffix, ec);
+    (*lock)->Discard();
     summary.error = opened.failure();
     return summary;
   }
@@ -225,6 +229,7 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
     if (!store_existed && summary.computed == 0) {
       std::error_code ec;
       for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(options.db_path + suffix, ec);
+      (*lock)->Discard();
     }
     return summary;
   }

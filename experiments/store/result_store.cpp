@@ -4,6 +4,7 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -72,14 +73,23 @@ std::set<std::string> ColumnsOf(sqlite3* db, const std::string& schema) {
   return columns;
 }
 
+bool IsIoError(sqlite3* db) {
+  const int code = sqlite3_errcode(db);
+  return code == SQLITE_IOERR || code == SQLITE_FULL || code == SQLITE_READONLY || code == SQLITE_CANTOPEN;
+}
+
+// SQLite's "disk I/O error" says nothing of the cause; the system's errno does ("File too large").
+std::string WithSystemReason(sqlite3* db, std::string message) {
+  if (IsIoError(db) && sqlite3_system_errno(db) != 0) message += ": " + SystemReason(sqlite3_system_errno(db));
+  return message;
+}
+
 Status ExecOn(sqlite3* db, const std::string& sql) {
   char* message = nullptr;
   if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
-    std::string error = message ? message : "sqlite error";
+    std::string error = WithSystemReason(db, message ? message : "sqlite error");
     sqlite3_free(message);
-    const int code = sqlite3_errcode(db);
-    const bool io = code == SQLITE_IOERR || code == SQLITE_FULL || code == SQLITE_READONLY || code == SQLITE_CANTOPEN;
-    return Status::Failure(error, io ? ErrorCode::kIo : ErrorCode::kBadInput);
+    return Status::Failure(error, IsIoError(db) ? ErrorCode::kIo : ErrorCode::kBadInput);
   }
   return Ok();
 }
@@ -95,12 +105,20 @@ double FlickerIndex(const nlohmann::json& metrics) {
 }
 
 ResultStore::ResultStore(sqlite3* db, std::string path) : db_(db), path_(std::move(path)) {}
-ResultStore::~ResultStore() { sqlite3_close(db_); }
+ResultStore::~ResultStore() {
+  // WAL only while written: a finished store is left in rollback mode, so that
+  // whoever reads it later (report, merge) creates no -wal and -shm beside it.
+  // Another connection keeps it in WAL; that one must not be waited for.
+  if (writable_) {
+    sqlite3_busy_timeout(db_, 0);
+    (void)ExecOn(db_, "PRAGMA journal_mode=DELETE;");
+  }
+  sqlite3_close(db_);
+}
 
 Error ResultStore::Failure(const std::string& what) const {
-  const int code = sqlite3_errcode(db_);
-  const bool io = code == SQLITE_IOERR || code == SQLITE_FULL || code == SQLITE_READONLY || code == SQLITE_CANTOPEN;
-  return Error{io ? ErrorCode::kIo : ErrorCode::kBadInput, path_ + ": " + what + " (" + sqlite3_errmsg(db_) + ")"};
+  return Error{IsIoError(db_) ? ErrorCode::kIo : ErrorCode::kBadInput,
+               path_ + ": " + what + " (" + WithSystemReason(db_, sqlite3_errmsg(db_)) + ")"};
 }
 
 Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, Mode mode) {
@@ -152,7 +170,10 @@ Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, 
   }
   // WAL: a reader (report) never blocks the runner, and a crash mid-write rolls back cleanly.
   if (Status s = store->Exec("PRAGMA journal_mode=WAL;"); !s) return store->Failure("cannot open the results store");
-  if (Status s = store->Exec(kSchema); !s) return store->Failure("not a shimmer results store");
+  store->writable_ = true;
+  if (Status s = store->Exec(kSchema); !s)
+    return store->Failure(s.code() == ErrorCode::kIo ? "cannot write the results store"
+                                                     : "not a shimmer results store");
   // Stores from before the device columns get them; their old rows read NULL.
   const std::set<std::string> columns = ColumnsOf(db, "main");
   for (const char* column : {"device", "driver"})
@@ -332,7 +353,7 @@ Result<std::size_t> MergeStores(const std::vector<std::string>& inputs, const st
     if (!std::filesystem::is_regular_file(in, ec)) return R::Failure(in + ": no such results store");
     if (std::filesystem::equivalent(in, output, ec)) return R::Failure(in + ": is the output store itself");
     if (Status s = ExecOn(db.get(), "ATTACH DATABASE " + SqlQuote("file:" + in + "?mode=ro") + " AS other;"); !s)
-      return R::Failure(in + ": cannot open the results store (" + s.error() + ")");
+      return R::Failure(in + ": cannot open the results store (" + s.error() + ")", s.code());
     const std::set<std::string> columns = ColumnsOf(db.get(), "other");
     std::string select;
     for (const char* c : kJobColumns) select += (select.empty() ? "" : ", ") + (columns.count(c) ? std::string(c) : "NULL");
@@ -343,15 +364,20 @@ Result<std::size_t> MergeStores(const std::vector<std::string>& inputs, const st
     if (!copied) return R::Failure(in + ": " + copied.error());
   }
   const bool existed = std::filesystem::exists(output, ec);
+  auto remove_new_output = [&] {
+    if (!existed)
+      for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(output + suffix, ec);
+  };
   {
     // Creates the schema (and WAL) of a new output, or brings an old one up to date.
     auto store = ResultStore::Open(output);
-    if (!store) return store.failure();
+    if (!store) {
+      remove_new_output();
+      return store.failure();
+    }
   }
   auto fail = [&](const std::string& why) -> R {
-    if (!existed) {
-      for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(output + suffix, ec);
-    }
+    remove_new_output();
     return R::Failure(output + ": " + why, ErrorCode::kIo);
   };
   if (Status s = ExecOn(db.get(), "ATTACH DATABASE " + SqlQuote(output) + " AS out;"); !s) return fail(s.error());
@@ -375,18 +401,44 @@ Result<std::size_t> MergeStores(const std::vector<std::string>& inputs, const st
 Result<std::unique_ptr<StoreLock>> StoreLock::Acquire(const std::string& store_path) {
   using R = Result<std::unique_ptr<StoreLock>>;
   const std::string lock_path = store_path + ".lock";
-  errno = 0;
-  const int fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) return R::Failure(lock_path + ": cannot create the store's lock file (" + SystemReason(errno) + ")", ErrorCode::kIo);
-  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
-    const int e = errno;
+  // Discard() unlinks a lock file while holding it, so a process that opened
+  // the old file may lock it after that; it must find the path gone or
+  // replaced, and take the lock again on the file the path now names.
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    errno = 0;
+    bool created = true;
+    int fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0 && errno == EEXIST) {
+      created = false;
+      fd = ::open(lock_path.c_str(), O_RDWR | O_CLOEXEC);
+    }
+    if (fd < 0) {
+      if (errno == ENOENT) continue;  // removed between the two opens
+      const ErrorCode code = errno == ENOTDIR ? ErrorCode::kBadInput : ErrorCode::kIo;
+      return R::Failure(lock_path + ": cannot create the store's lock file (" + SystemReason(errno) + ")", code);
+    }
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      const int e = errno;
+      ::close(fd);
+      // Not bad input: the same command works once the other runner is done.
+      if (e == EWOULDBLOCK)
+        return R::Failure(store_path + ": another shimmer process is running jobs into this store; wait for it to "
+                          "finish (one runner per store, lock " + lock_path + ")",
+                          ErrorCode::kBusy);
+      return R::Failure(lock_path + ": cannot lock (" + SystemReason(e) + ")", ErrorCode::kIo);
+    }
+    struct stat held {}, named {};
+    if (::fstat(fd, &held) == 0 && ::stat(lock_path.c_str(), &named) == 0 && held.st_dev == named.st_dev &&
+        held.st_ino == named.st_ino)
+      return std::unique_ptr<StoreLock>(new StoreLock(fd, lock_path, created));
     ::close(fd);
-    if (e == EWOULDBLOCK)
-      return R::Failure(store_path + ": another shimmer process is running jobs into this store; wait for it to finish "
-                        "(one runner per store, lock " + lock_path + ")");
-    return R::Failure(lock_path + ": cannot lock (" + SystemReason(e) + ")", ErrorCode::kIo);
   }
-  return std::unique_ptr<StoreLock>(new StoreLock(fd));
+  return R::Failure(lock_path + ": the lock file keeps being replaced", ErrorCode::kIo);
+}
+
+void StoreLock::Discard() {
+  if (created_) ::unlink(path_.c_str());
+  created_ = false;
 }
 
 StoreLock::~StoreLock() { ::close(fd_); }

@@ -1,8 +1,10 @@
 #include "pipeline_cache.h"
 
+#include <cctype>
 #include <chrono>
 #include <map>
 #include <mutex>
+#include <sstream>
 #include <string_view>
 #include <tuple>
 
@@ -36,33 +38,44 @@ std::vector<shading::GlslFile> KernelFiles(bool user_variant, shading::GlslFile*
   return extra;
 }
 
-constexpr const char* kUserVariantSignature =
+constexpr std::string_view kUserVariantSignature =
     "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p)";
 
-// One line from glslang's log ("ERROR: user_variant.glsl:2: 'x' : undeclared
-// identifier" and more): the first error, at the user's path as they gave
-// it. An error that glslang places in the kernel is at the call of
-// userVariant, so the file does not define it with the right signature.
+// A compile failure of the user's variant file as one line. glslang's log has
+// a line per error ("ERROR: user_variant.glsl:2: 'x' : undeclared identifier",
+// then "ERROR: 2 compilation errors. ..."); the first one says it, under the
+// name the user gave the file. An error inside the kernel means the file did
+// not define what the kernel calls: that is the user's file too, and the
+// kernel's line numbers would mean nothing to them.
 std::string UserVariantError(const std::string& log, const std::string& user_file) {
   std::vector<std::string> errors;
-  for (std::size_t start = 0; start < log.size();) {
-    std::size_t end = log.find('\n', start);
-    if (end == std::string::npos) end = log.size();
-    std::string line = log.substr(start, end - start);
-    start = end + 1;
-    if (line.rfind("ERROR: ", 0) != 0 || line.find(" compilation errors") != std::string::npos) continue;
-    line = line.substr(7);
-    while (!line.empty() && line.back() == ' ') line.pop_back();
+  std::istringstream lines(log);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("ERROR: ", 0) != 0) continue;
+    line.erase(0, 7);
+    if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) continue;  // "N compilation errors"
+    while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back()))) line.pop_back();
     errors.push_back(line);
   }
   if (errors.empty()) return user_file + ": does not compile as a variant";
-  std::string first = errors.front();
-  const std::string more = errors.size() > 1 ? " (and " + std::to_string(errors.size() - 1) + " more)" : "";
-  if (first.rfind(std::string(kUserVariantFile) + ":", 0) == 0)
-    return user_file + first.substr(kUserVariantFile.size()) + more;
-  auto colon = first.find(": ", first.find(':') + 1);
-  const std::string reason = colon == std::string::npos ? first : first.substr(colon + 2);
-  return user_file + ": must define " + kUserVariantSignature + " (glslang: " + reason + ")";
+  // "<file>:<line>: '<token>' : <problem>"; the token is often empty.
+  std::string first = errors.front(), where, problem = first;
+  if (auto colon = first.find(": '"); colon != std::string::npos) {
+    where = first.substr(0, colon);
+    problem = first.substr(colon + 2);
+    if (auto sep = problem.find("' :"); sep != std::string::npos) {
+      const std::string token = problem.substr(1, sep - 1);
+      std::string text = problem.substr(sep + 3);
+      text.erase(0, text.find_first_not_of(' '));
+      problem = token.empty() ? text : "'" + token + "': " + text;
+    }
+  }
+  const std::string more =
+      errors.size() > 1 ? " (and " + std::to_string(errors.size() - 1) + " more compile errors)" : "";
+  if (where.rfind(kUserVariantFile, 0) == 0)
+    return user_file + where.substr(kUserVariantFile.size()) + ": " + problem + more;
+  return user_file + ": does not define " + std::string(kUserVariantSignature) + " (the kernel's call fails: " +
+         problem + ")";
 }
 
 struct SpirvCache {

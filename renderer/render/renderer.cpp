@@ -1,7 +1,5 @@
 #include "shimmer/renderer/renderer.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -183,20 +181,6 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
   using R = Result<std::unique_ptr<Renderer>>;
   if (Status s = ValidateSettings(settings); !s) return s.failure();
   const testing::TestHooks hooks = testing::CurrentTestHooks();
-  // A frame lives on the host as every plane in float; a sequence holds up to
-  // four at once (rendering, two queued for the writer, one being written).
-  // Refused here, with the numbers, rather than as a bad_alloc or a machine
-  // thrashing its swap halfway through.
-  const double frame_bytes = double(settings.width) * settings.height * kChannelCount * sizeof(float);
-  const double host_bytes = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE));
-  if (host_bytes > 0 && 4 * frame_bytes > host_bytes) {
-    char text[256];
-    std::snprintf(text, sizeof text,
-                  "a %dx%d frame needs %.1f GiB of host memory (%d float planes) and up to 4 are in flight; "
-                  "this machine has %.1f GiB",
-                  settings.width, settings.height, frame_bytes / (1 << 30), int(kChannelCount), host_bytes / (1 << 30));
-    return R::Failure(text, ErrorCode::kOutOfMemory);
-  }
   std::unique_ptr<Renderer> r(new Renderer());
   Impl& im = *r->impl_;
   im.settings = settings;

@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <deque>
 #include <filesystem>
+#include <fstream>
+#include <limits>
 #include <mutex>
 #include <new>
 #include <thread>
@@ -33,7 +35,7 @@ class FrameWriter {
  public:
   FrameWriter(bool with_stderr, bool compress)
       : with_stderr_(with_stderr), compress_(compress), thread_([this] { Loop(); }) {}
-  ~FrameWriter() { Finish(); }
+  ~FrameWriter() { (void)Finish(); }  // a failure was already returned by the caller's Finish()
 
   void Push(std::string path, Frame frame) {
     std::unique_lock<std::mutex> lock(mutex_);
@@ -94,17 +96,46 @@ std::string FrameName(int i) {
 // refused for its output leaves no directory behind.
 Status CheckOutputDirectory(const fs::path& dir) {
   std::error_code ec;
-  fs::path existing = fs::absolute(dir, ec);
+  fs::path existing = dir;
   while (!existing.empty() && !fs::exists(existing, ec) && existing != existing.parent_path())
     existing = existing.parent_path();
+  if (existing.empty()) existing = ".";
+  // A file in the way is the path the user gave; a directory they may not write to is the system's answer.
   if (!fs::is_directory(existing, ec))
     return Status::Failure(dir.string() + ": cannot create the output directory (" + existing.string() +
-                               " is not a directory)",
-                           ErrorCode::kIo);
+                           " is not a directory)");
   if (::access(existing.c_str(), W_OK | X_OK) != 0)
     return Status::Failure(dir.string() + ": output directory is not writable (" + existing.string() + ")",
                            ErrorCode::kIo);
   return Ok();
+}
+
+// Host memory the system can give without swapping (MemAvailable), or 0 when unknown.
+std::uint64_t AvailableMemory() {
+  std::ifstream meminfo("/proc/meminfo");
+  for (std::string key; meminfo >> key;) {
+    std::uint64_t kib = 0;
+    meminfo >> kib;
+    if (key == "MemAvailable:") return kib * 1024;
+    meminfo.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+  }
+  return 0;
+}
+
+// At least two frames live at once: one rendering while the last is written.
+// A size that cannot have them is refused before the device is touched: the
+// allocation itself may succeed and its first use bring the OOM killer.
+Status CheckHostMemory(const RenderSettings& s) {
+  const std::uint64_t frame = std::uint64_t(s.width) * std::uint64_t(s.height) * kChannelCount * sizeof(float);
+  const std::uint64_t available = AvailableMemory();
+  if (available == 0 || 2 * frame <= available) return Ok();
+  // Starts with the field's name, as ValidateSettings' messages do (the CLI names its flag instead).
+  char text[192];
+  std::snprintf(text, sizeof text,
+                "width and height %dx%d: a frame takes %.1f GiB of host memory and rendering holds two at once; "
+                "%.1f GiB are available",
+                s.width, s.height, double(frame) / (1 << 30), double(available) / (1 << 30));
+  return Status::Failure(text, ErrorCode::kOutOfMemory);
 }
 
 SequenceFile Describe(const RenderSettings& settings, const Renderer& renderer) {
@@ -193,6 +224,7 @@ Result<SequenceFile> RenderSequence(const RenderSettings& settings, const std::s
   // Everything that can be refused without a device is, before any file exists.
   if (Status s = ValidateSettings(settings); !s) return s.failure();
   if (Status s = CheckOutputDirectory(out_dir); !s) return s.failure();
+  if (Status s = CheckHostMemory(settings); !s) return s.failure();
   auto renderer = Renderer::Create(settings);
   if (!renderer) return renderer.failure();
   std::error_code ec;

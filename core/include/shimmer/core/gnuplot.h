@@ -15,14 +15,15 @@ bool GnuplotAvailable();
 
 // Runs `gnuplot script` with `dir` as the working directory. The error (a
 // warning to most callers: the data and script are still there) names the
-// script and says whether gnuplot is missing or failed.
+// script and says whether gnuplot is missing or failed; with code kIo, an
+// error to every caller, it names a plot that was cut short (a full disk).
 Status RunGnuplot(const std::filesystem::path& dir, const std::string& script);
 
 // Writes `dir/<script_name>` = script_text("<output>") and draws `dir/<output>`
 // from it without a half-drawn file ever under that name: gnuplot runs on a
 // copy of the script aimed at a temporary name, which is then renamed.
-// Returns a warning when the plot could not be drawn; an error only when the
-// script could not be written.
+// Returns a warning when the plot could not be drawn; an error when the
+// script or the plot could not be written (then neither is left).
 Result<std::optional<std::string>> WritePlot(const std::filesystem::path& dir, const std::string& script_name,
                                              const std::string& output,
                                              const std::function<std::string(const std::string&)>& script_text);

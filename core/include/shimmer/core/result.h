@@ -15,6 +15,7 @@ enum class ErrorCode {
   kIo,           // reading or writing failed: missing permission, full disk
   kDeviceLost,   // the GPU stopped answering (reset, hang, driver crash)
   kOutOfMemory,  // host or device memory ran out
+  kBusy,         // another process holds what is needed (a store's lock); the same command works later
   kInternal,     // a failure no input explains (a bug, or the platform)
 };
 

@@ -28,12 +28,14 @@ class StagedDirectory {
   Status Write(const std::string& name, std::string_view text);
   // Moves every staged file into `out`; `last` (e.g. "report.md") goes last.
   Status Commit(const std::string& last);
+  // `error` naming the files by their final paths, not the staging ones.
+  Error Unstaged(const Error& error) const;
 
  private:
-  StagedDirectory(std::filesystem::path out, std::filesystem::path staging, bool created_out)
-      : out_(std::move(out)), staging_(std::move(staging)), created_out_(created_out) {}
+  StagedDirectory(std::filesystem::path out, std::filesystem::path staging, std::vector<std::filesystem::path> created)
+      : out_(std::move(out)), staging_(std::move(staging)), created_(std::move(created)) {}
   std::filesystem::path out_, staging_;
-  bool created_out_;
+  std::vector<std::filesystem::path> created_;  // `out` and the parents Create made, deepest first
   bool committed_ = false;
 };
 

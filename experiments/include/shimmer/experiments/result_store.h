@@ -38,7 +38,7 @@ double FlickerIndex(const nlohmann::json& metrics);
 class ResultStore {
  public:
   enum class Mode {
-    kReadWrite,  // created when missing, schema brought up to date, WAL journal
+    kReadWrite,  // created when missing, schema brought up to date, WAL journal while open
     kReadOnly,   // must exist; never written, not even its journal mode
   };
   // The error names the file and the cause.
@@ -64,6 +64,7 @@ class ResultStore {
   sqlite3* db_;
   std::string path_;
   bool has_device_columns_ = true;
+  bool writable_ = false;  // opened kReadWrite and switched to WAL
 };
 
 // Joins the jobs of `inputs` into `output` (created when missing; rows whose
@@ -81,10 +82,15 @@ class StoreLock {
   ~StoreLock();
   StoreLock(const StoreLock&) = delete;
   StoreLock& operator=(const StoreLock&) = delete;
+  // Removes the lock file when Acquire created it (the lock stays held until
+  // the object goes): for a run that failed before leaving a store behind.
+  void Discard();
 
  private:
-  explicit StoreLock(int fd) : fd_(fd) {}
+  StoreLock(int fd, std::string path, bool created) : fd_(fd), path_(std::move(path)), created_(created) {}
   int fd_;
+  std::string path_;
+  bool created_;
 };
 
 }  // namespace shimmer::experiments

@@ -110,20 +110,15 @@ void Run(const MetricsCliOptions& o) {
   }
 
   std::error_code ec;
-  const bool out_existed = !o.out.empty() && std::filesystem::exists(o.out, ec);
   const bool video_existed = !o.video.empty() && std::filesystem::exists(o.video, ec);
   m::MetricsReport report = Take(m::ComputeMetrics(options, observer));
   std::vector<std::string> warnings = report.warnings;
   if (video) Check(video->Finish());
   if (!o.out.empty()) {
-    // WriteReportFiles writes file by file: what it wrote into a directory it
-    // created goes again, and so does the video, so that a failed command
-    // leaves no outputs behind.
+    // WriteReportFiles is all or nothing; the video, finished before it, goes
+    // with it, so that a failed command leaves no outputs behind.
     const Status written = m::WriteReportFiles(report, o.out, &warnings);
-    if (!written) {
-      if (!out_existed) std::filesystem::remove_all(o.out, ec);
-      if (video && !video_existed) std::filesystem::remove(o.video, ec);
-    }
+    if (!written && video && !video_existed) std::filesystem::remove(o.video, ec);
     Check(written);
   }
   for (size_t i = report.warnings.size(); i < warnings.size(); ++i) report.warnings.push_back(warnings[i]);

@@ -120,7 +120,7 @@ void Run(const SweepOptions& o) {
   if (o.csv.empty()) return dirs.Keep();
   const std::filesystem::path path(o.csv);
   // The table, its script and its plot appear together or not at all.
-  auto staged = Take(experiments::StagedDirectory::Create(path.parent_path()));
+  auto staged = Take(StagedDirectory::Create(path.parent_path()));
   auto check = [&staged](const Status& s) {
     if (!s) throw CommandError(staged->Unstaged(s.failure()));
   };

@@ -141,19 +141,16 @@ cv::Mat RenderHeatmap(const cv::Mat& values, const cv::Mat& region, HeatmapScali
 }
 
 Status WriteImage(const std::filesystem::path& file, const cv::Mat& image) {
-  const std::filesystem::path temporary = TemporaryPathFor(file);
-  bool written = false;
+  // Encoded in memory, then written as any file is: the write's failure then
+  // has the system's reason (a full disk), not the codec's.
+  std::vector<unsigned char> bytes;
   try {
-    written = cv::imwrite(temporary.string(), image);
+    if (!cv::imencode(file.extension().string(), image, bytes))
+      return Status::Failure(file.string() + ": OpenCV cannot encode this image format", ErrorCode::kInternal);
   } catch (const cv::Exception& e) {
-    written = false;
+    return Status::Failure(file.string() + ": cannot encode the image (" + e.err + ")", ErrorCode::kInternal);
   }
-  if (!written) {
-    std::error_code ec;
-    std::filesystem::remove(temporary, ec);
-    return Status::Failure(file.string() + ": cannot write image");
-  }
-  return CommitFile(temporary, file);
+  return WriteFileAtomic(file, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
 }  // namespace shimmer::metrics

@@ -7,6 +7,7 @@
 
 #include "shimmer/core/atomic_file.h"
 #include "shimmer/core/gnuplot.h"
+#include "shimmer/core/staged_directory.h"
 #include "shimmer/metrics/exr_sequence.h"
 #include "shimmer/metrics/heatmap.h"
 #include "shimmer/metrics/temporal_sensitivity.h"
@@ -69,33 +70,38 @@ Status WriteSpectrumPlot(const MetricsReport& report, const fs::path& dir, std::
   return Ok();
 }
 
-Status WriteReportFiles(const MetricsReport& report, const fs::path& dir, std::vector<std::string>* warnings) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir))
-    return Status::Failure(dir.string() + ": cannot create the directory" + (ec ? " (" + ec.message() + ")" : ""),
-                           ErrorCode::kIo);
+Status WriteReportFiles(const MetricsReport& report, const fs::path& out, std::vector<std::string>* warnings) {
+  // Every file into a staging directory, then renamed together, metrics.json
+  // last: a failure part-way leaves the previous outputs as they were.
+  auto staged = StagedDirectory::Create(out);
+  if (!staged) return staged.failure();
+  const fs::path& dir = (*staged)->staging();
+  auto in_final_names = [&](Status s) { return s ? s : Status((*staged)->Unstaged(s.failure())); };
   const cv::Mat& region = report.region_mask;
   if (Status s = WriteMap(dir, "tv_test", report.tv_test_map, region, HeatmapScaling::kLog,
                           "temporal variance of T (Y^2)");
       !s)
-    return s;
+    return in_final_names(s);
   if (!report.reference.empty()) {
     if (Status s = WriteMap(dir, "tv_ref", report.tv_ref_map, region, HeatmapScaling::kLog,
                             "temporal variance of R (Y^2)");
         !s)
-      return s;
+      return in_final_names(s);
     if (Status s = WriteMap(dir, "tv_err", report.tv_err_map, region, HeatmapScaling::kLog,
                             "temporal variance of E = T - R (Y^2)");
         !s)
-      return s;
+      return in_final_names(s);
     if (Status s = WriteMap(dir, "energy_bias", report.energy_bias_map, region, HeatmapScaling::kSigned,
                             "energy bias (sum T - sum R) / sum R");
         !s)
-      return s;
+      return in_final_names(s);
   }
-  if (Status s = WriteSpectrumPlot(report, dir, warnings); !s) return s;
-  return WriteFileAtomic(dir / "metrics.json", ToJson(report).dump(2) + "\n");
+  std::vector<std::string> plot_warnings;
+  if (Status s = WriteSpectrumPlot(report, dir, &plot_warnings); !s) return in_final_names(s);
+  if (warnings)
+    for (const std::string& w : plot_warnings) warnings->push_back((*staged)->Unstaged({ErrorCode::kInternal, w}).message);
+  if (Status s = WriteFileAtomic(dir / "metrics.json", ToJson(report).dump(2) + "\n"); !s) return in_final_names(s);
+  return (*staged)->Commit("metrics.json");
 }
 
 }  // namespace shimmer::metrics

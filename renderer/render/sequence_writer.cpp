@@ -204,19 +204,16 @@ Status WritePreviewPng(const std::string& path, const Frame& frame) {
                                  encode(frame.planes[(kBeautyR + 1) * plane + i]),
                                  encode(frame.planes[kBeautyR * plane + i])};
     }
-  const fs::path temporary = TemporaryPathFor(path);
+  // Encoded in memory, then written as any file is: a failed write gets the
+  // system's reason (a full disk) and leaves no partial PNG.
+  std::vector<unsigned char> png;
   try {
-    if (!cv::imwrite(temporary.string(), img)) {
-      std::error_code ec;
-      fs::remove(temporary, ec);
-      return Status::Failure(path + ": cannot write the preview image", ErrorCode::kIo);
-    }
+    if (!cv::imencode(".png", img, png))
+      return Status::Failure(path + ": OpenCV cannot encode PNG", ErrorCode::kInternal);
   } catch (const cv::Exception& e) {
-    std::error_code ec;
-    fs::remove(temporary, ec);
-    return Status::Failure(path + ": cannot write the preview image (" + e.err + ")", ErrorCode::kIo);
+    return Status::Failure(path + ": cannot encode the preview (" + e.err + ")", ErrorCode::kInternal);
   }
-  return CommitFile(temporary, path);
+  return WriteFileAtomic(path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
 }
 
 Result<SequenceFile> RenderSequence(const RenderSettings& settings, const std::string& out_dir,

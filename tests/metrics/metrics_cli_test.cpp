@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdio>
 #include <fstream>
+#include <map>
 
 #include <nlohmann/json.hpp>
 
@@ -108,6 +109,33 @@ TEST(MetricsCli, OutWritesMapsHeatmapsAndSpectrum) {
   // No partial files left behind.
   for (const auto& e : std::filesystem::directory_iterator(dir / "out"))
     EXPECT_EQ(e.path().filename().string().find(".partial"), std::string::npos) << e.path();
+}
+
+// --out is all or nothing: a second run that fails part-way (here a
+// file-size limit, as a full disk would) leaves the first run's files as
+// they were, and nothing of its own.
+TEST(MetricsCli, FailedOutLeavesThePreviousOutputsWhole) {
+  TempDir dir;
+  WriteSequence(dir / "test", Flicker(8));
+  WriteSequence(dir / "ref", Steady(8));
+  const std::string args = (dir / "test").string() + " " + (dir / "ref").string() + " --out " + (dir / "out").string();
+  ASSERT_EQ(RunShimmer(args, dir.path()).exit_code, 0);
+  auto listing = [&] {
+    std::map<std::string, std::string> files;
+    for (const auto& e : std::filesystem::directory_iterator(dir / "out")) {
+      std::ifstream in(e.path(), std::ios::binary);
+      files[e.path().filename().string()].assign(std::istreambuf_iterator<char>(in), {});
+    }
+    return files;
+  };
+  const auto before = listing();
+  // Another sequence, so that every map would change.
+  WriteSequence(dir / "test", Steady(8));
+  const std::string limited = "sh -c 'ulimit -f 8; exec " + std::string(SHIMMER_EXE) + " metrics " + args + "' 2>" +
+                              (dir / "stderr.txt").string();
+  const int status = std::system(limited.c_str());
+  EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 1);
+  EXPECT_EQ(listing(), before);
 }
 
 TEST(MetricsCli, VideoIsWrittenOrClearlyRefused) {

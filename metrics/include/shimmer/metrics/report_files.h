@@ -10,7 +10,8 @@
 
 namespace shimmer::metrics {
 
-// Writes into `dir` (created if needed), each file through a temporary name:
+// Writes into `dir` (created if needed), all files or none: they are staged
+// in a hidden directory inside it and renamed together, metrics.json last.
 //   metrics.json                       the --json object
 //   tv_test.exr/.png  tv_ref.*  tv_err.*  energy_bias.*   per-pixel maps
 //                                      (EXR: one float channel Y; PNG: heatmap + legend)

@@ -19,6 +19,7 @@
 
 #include "shimmer/core/atomic_file.h"
 #include "shimmer/core/exr_output.h"
+#include "shimmer/core/host_memory.h"
 #include "shimmer/renderer/renderer.h"
 
 namespace shimmer::render {
@@ -110,24 +111,12 @@ Status CheckOutputDirectory(const fs::path& dir) {
   return Ok();
 }
 
-// Host memory the system can give without swapping (MemAvailable), or 0 when unknown.
-std::uint64_t AvailableMemory() {
-  std::ifstream meminfo("/proc/meminfo");
-  for (std::string key; meminfo >> key;) {
-    std::uint64_t kib = 0;
-    meminfo >> kib;
-    if (key == "MemAvailable:") return kib * 1024;
-    meminfo.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
-  }
-  return 0;
-}
-
 // At least two frames live at once: one rendering while the last is written.
 // A size that cannot have them is refused before the device is touched: the
 // allocation itself may succeed and its first use bring the OOM killer.
 Status CheckHostMemory(const RenderSettings& s) {
   const std::uint64_t frame = std::uint64_t(s.width) * std::uint64_t(s.height) * kChannelCount * sizeof(float);
-  const std::uint64_t available = AvailableMemory();
+  const std::uint64_t available = AvailableHostMemory();
   if (available == 0 || 2 * frame <= available) return Ok();
   // Starts with the field's name, as ValidateSettings' messages do (the CLI names its flag instead).
   char text[192];

@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "shimmer/core/exr_output.h"
+#include "shimmer/core/host_memory.h"
 
 namespace {
 
@@ -532,20 +533,10 @@ std::vector<Case> GpuCases() {
   };
 }
 
-// MemAvailable of /proc/meminfo, in bytes.
-std::uint64_t AvailableMemory() {
-  std::ifstream meminfo("/proc/meminfo");
-  for (std::string key; meminfo >> key;) {
-    std::uint64_t kib = 0;
-    meminfo >> kib;
-    if (key == "MemAvailable:") return kib * 1024;
-  }
-  return 0;
-}
 
 void RunCase(const Case& c) {
   if (c.needs_permissions && ::geteuid() == 0) GTEST_SKIP() << "running as root: permission bits do not stop writes";
-  if (c.needs_less_memory && AvailableMemory() >= c.needs_less_memory)
+  if (c.needs_less_memory && shimmer::AvailableHostMemory() >= c.needs_less_memory)
     GTEST_SKIP() << "this machine has the memory: the render would go ahead";
   const fs::path dir = Root() / c.name;
   fs::create_directories(dir);

@@ -10,25 +10,16 @@
 #include <fstream>
 #include <string>
 
+#include "cli_run.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
+using shimmer::testing::CliRun;
 
 CliRun Shimmer(const std::string& args, const std::string& env = "XDG_RUNTIME_DIR=/tmp") {
-  std::string cmd = "env " + env + " " SHIMMER_CLI " " + args + " 2>&1";
-  CliRun r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), buf.size(), p)) r.output += buf.data();
-  int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return shimmer::testing::RunShimmer(SHIMMER_CLI, args, env);
 }
 
 fs::path FreshDir(const std::string& name) {

@@ -9,26 +9,14 @@
 #include <cstdio>
 #include <string>
 
+#include "cli_run.h"
 #include "shimmer/renderer/shading.h"
 
 namespace {
 
-struct CliRun {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
+using shimmer::testing::CliRun;
 
-CliRun Shimmer(const std::string& args) {
-  std::string cmd = "env XDG_RUNTIME_DIR=/tmp " SHIMMER_CLI " " + args + " 2>&1";
-  CliRun r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), buf.size(), p)) r.output += buf.data();
-  int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+CliRun Shimmer(const std::string& args) { return shimmer::testing::RunShimmer(SHIMMER_CLI, args); }
 
 // Exit 2 and exactly one line, the error, which holds `needle`.
 void ExpectRefused(const std::string& args, const std::string& needle) {

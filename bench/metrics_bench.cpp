@@ -68,11 +68,11 @@ void WriteSequence(const fs::path& dir, int width, int height, int frames, bool 
     cv::Mat beauty = spec + diffuse;
     char name[32];
     std::snprintf(name, sizeof name, "frame_%04d.exr", t);
-    shimmer::Status s = shimmer::WriteExr(dir / name, width, height,
-                                          {m::PlaneOf("R", beauty), m::PlaneOf("G", beauty), m::PlaneOf("B", beauty),
-                                           m::PlaneOf("specular.R", spec), m::PlaneOf("specular.G", spec),
-                                           m::PlaneOf("specular.B", spec), m::PlaneOf("motion.X", mx),
-                                           m::PlaneOf("motion.Y", my)});
+    shimmer::Status s =
+        shimmer::WriteExr(dir / name, width, height,
+                          {m::PlaneOf("R", beauty), m::PlaneOf("G", beauty), m::PlaneOf("B", beauty),
+                           m::PlaneOf("specular.R", spec), m::PlaneOf("specular.G", spec),
+                           m::PlaneOf("specular.B", spec), m::PlaneOf("motion.X", mx), m::PlaneOf("motion.Y", my)});
     if (!s) {
       std::fprintf(stderr, "%s\n", s.error().c_str());
       std::exit(1);
@@ -97,7 +97,8 @@ void BM_MetricsPass(benchmark::State& state) {
     }
     benchmark::DoNotOptimize(report->tv_err);
   }
-  state.counters["fps"] = benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["fps"] =
+      benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsIterationInvariantRate);
   state.counters["Mpix/s"] = benchmark::Counter(static_cast<double>(frames) * width * height / 1e6,
                                                 benchmark::Counter::kIsIterationInvariantRate);
 }

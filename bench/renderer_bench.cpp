@@ -106,20 +106,33 @@ void BM_ExrWrite(benchmark::State& state) {
 int main(int argc, char** argv) {
   using shimmer::shading::DerivativeSource;
   benchmark::RegisterBenchmark("frame/none/quad", BM_Frame, std::string("none"), DerivativeSource::kQuadFine)
-      ->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(8);
+      ->UseManualTime()
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(8);
   benchmark::RegisterBenchmark("frame/none/analytic", BM_Frame, std::string("none"), DerivativeSource::kAnalytic)
-      ->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(8);
+      ->UseManualTime()
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(8);
   for (const auto& v : shimmer::shading::Variants()) {
     if (v.name == "none") continue;
     for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
-      benchmark::RegisterBenchmark(("frame/" + std::string(v.name) + (d == DerivativeSource::kAnalytic ? "/analytic" : "/quad")).c_str(),
-                                   BM_Frame, std::string(v.name), d)
-          ->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(8);
+      benchmark::RegisterBenchmark(
+          ("frame/" + std::string(v.name) + (d == DerivativeSource::kAnalytic ? "/analytic" : "/quad")).c_str(),
+          BM_Frame, std::string(v.name), d)
+          ->UseManualTime()
+          ->Unit(benchmark::kMillisecond)
+          ->Iterations(8);
   }
   benchmark::RegisterBenchmark("frame/supersample-2/quad", BM_Frame, std::string("supersample-2"),
                                DerivativeSource::kQuadFine)
-      ->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(4);
-  benchmark::RegisterBenchmark("reference", BM_Reference)->Arg(16)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(3);
+      ->UseManualTime()
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(4);
+  benchmark::RegisterBenchmark("reference", BM_Reference)
+      ->Arg(16)
+      ->UseManualTime()
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(3);
   benchmark::RegisterBenchmark("exr_write_512", BM_ExrWrite)->Unit(benchmark::kMillisecond)->Iterations(5);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();

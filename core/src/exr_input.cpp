@@ -23,8 +23,8 @@ namespace fs = std::filesystem;
 struct ExrInput::Context {
   exr_context_t exr = nullptr;
   std::mutex mutex;
-  std::string message;        // OpenEXR's own wording of the first error
-  std::vector<char> bytes;    // the whole file, when read in one go
+  std::string message;      // OpenEXR's own wording of the first error
+  std::vector<char> bytes;  // the whole file, when read in one go
 
   ~Context() {
     if (exr) exr_finish(&exr);
@@ -84,9 +84,8 @@ struct ChunkPlace {
 Status ReadWithImf(const fs::path& file, int part, const ExrPartInfo& info,
                    const std::vector<ExrPlaneRequest>& requests) {
   static std::once_flag pool;
-  std::call_once(pool, [] {
-    Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
-  });
+  std::call_once(
+      pool, [] { Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))); });
   try {
     Imf::MultiPartInputFile in(file.c_str());
     Imf::InputPart input(in, part);
@@ -160,8 +159,8 @@ Result<ExrInput> ExrInput::Open(const fs::path& file, bool whole_file) {
     if (!ec && std::uint64_t(chunks) * 8 > size)
       return R::Failure(Unreadable(file, "its header's " + std::to_string(part.width) + "x" +
                                              std::to_string(part.height) + " data window needs " +
-                                             std::to_string(chunks) + " chunks, more than its " +
-                                             std::to_string(size) + " bytes can hold"));
+                                             std::to_string(chunks) + " chunks, more than its " + std::to_string(size) +
+                                             " bytes can hold"));
     for (int c = 0; c < channels->num_channels; ++c) {
       const exr_attr_chlist_entry_t& e = channels->entries[c];
       part.channels.push_back({std::string(e.name.str, e.name.length), e.x_sampling, e.y_sampling});
@@ -207,8 +206,7 @@ Status ExrInput::Read(int part, const std::vector<ExrPlaneRequest>& requests) co
     place->y = (index / columns) * block_h;
     exr_result_t r = tiled ? exr_read_tile_chunk_info(exr, part, index % columns, index / columns, 0, 0, &place->info)
                            : exr_read_scanline_chunk_info(exr, part, info.min_y + place->y, &place->info);
-    if (r == EXR_ERR_SUCCESS &&
-        (place->info.width > width - place->x || place->info.height > height - place->y))
+    if (r == EXR_ERR_SUCCESS && (place->info.width > width - place->x || place->info.height > height - place->y))
       r = EXR_ERR_CORRUPT_CHUNK;  // would write outside the plane
     return r;
   };

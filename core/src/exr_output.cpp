@@ -1,11 +1,11 @@
 #include "shimmer/core/exr_output.h"
 
+#include <Imath/half.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
 #include <ImfThreading.h>
-#include <Imath/half.h>
 
 #include <algorithm>
 #include <mutex>
@@ -22,15 +22,14 @@ Status WriteExr(const fs::path& file, int width, int height, const std::vector<E
                 ExrCompression compression) {
   if (planes.empty()) return Status::Failure(file.string() + ": no channels to write", ErrorCode::kInternal);
   if (width <= 0 || height <= 0)
-    return Status::Failure(file.string() + ": cannot write an empty " + std::to_string(width) + "x" +
-                               std::to_string(height) + " image",
-                           ErrorCode::kInternal);
+    return Status::Failure(
+        file.string() + ": cannot write an empty " + std::to_string(width) + "x" + std::to_string(height) + " image",
+        ErrorCode::kInternal);
   // ZIP-compressing the 16-line blocks is most of a frame's write: OpenEXR
   // compresses them on its thread pool when it has one.
   static std::once_flag pool;
-  std::call_once(pool, [] {
-    Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
-  });
+  std::call_once(
+      pool, [] { Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))); });
   const fs::path temporary = TemporaryPathFor(file);
   const std::size_t pixels = std::size_t(width) * std::size_t(height);
   try {
@@ -57,9 +56,9 @@ Status WriteExr(const fs::path& file, int width, int height, const std::vector<E
   } catch (const std::bad_alloc&) {
     std::error_code ec;
     fs::remove(temporary, ec);
-    return Status::Failure(file.string() + ": out of memory writing a " + std::to_string(width) + "x" +
-                               std::to_string(height) + " EXR",
-                           ErrorCode::kOutOfMemory);
+    return Status::Failure(
+        file.string() + ": out of memory writing a " + std::to_string(width) + "x" + std::to_string(height) + " EXR",
+        ErrorCode::kOutOfMemory);
   } catch (const std::exception& e) {
     std::error_code ec;
     fs::remove(temporary, ec);

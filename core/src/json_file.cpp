@@ -47,15 +47,15 @@ Result<nlohmann::json> ParseJson(std::string_view text, const std::string& sourc
     if (auto open = what.find('\''), close = what.rfind('\''); open != std::string::npos && close > open)
       offset = text.find(what.substr(open + 1, close - open - 1));
     if (auto id = what.find("] "); id != std::string::npos) what = what.substr(id + 2);
-    return Result<nlohmann::json>::Failure(source + (offset == std::string_view::npos ? "" : ":" + Position(text, offset)) +
+    return Result<nlohmann::json>::Failure(source +
+                                           (offset == std::string_view::npos ? "" : ":" + Position(text, offset)) +
                                            ": number out of range (" + what + ")");
   }
 }
 
 Result<nlohmann::json> ReadJsonFile(const std::filesystem::path& path) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec))
-    return Result<nlohmann::json>::Failure(path.string() + ": no such file");
+  if (!std::filesystem::exists(path, ec)) return Result<nlohmann::json>::Failure(path.string() + ": no such file");
   if (std::filesystem::is_directory(path, ec))
     return Result<nlohmann::json>::Failure(path.string() + ": is a directory, expected a JSON file");
   errno = 0;

@@ -132,10 +132,14 @@ Result<SequenceFile> SequenceFromJson(const json& j, const std::string& source) 
   FieldReader r(j, source);
   if (j.contains("status")) {
     const json& v = j["status"];
-    if (v == "running") s.status = SequenceStatus::kRunning;
-    else if (v == "complete") s.status = SequenceStatus::kComplete;
-    else if (v == "failed") s.status = SequenceStatus::kFailed;
-    else r.Fail("status", "\"running\", \"complete\" or \"failed\"");
+    if (v == "running")
+      s.status = SequenceStatus::kRunning;
+    else if (v == "complete")
+      s.status = SequenceStatus::kComplete;
+    else if (v == "failed")
+      s.status = SequenceStatus::kFailed;
+    else
+      r.Fail("status", "\"running\", \"complete\" or \"failed\"");
   }
   r.Read("error", &s.error);
   r.Read("scene", &s.scene);

@@ -29,8 +29,8 @@ Result<std::unique_ptr<StagedDirectory>> StagedDirectory::Create(const fs::path&
   if (ec) {
     remove_created();
     // A file where a directory should be is the user's path; anything else (permissions, space) is the system.
-    const ErrorCode code = ec == std::errc::not_a_directory || ec == std::errc::file_exists ? ErrorCode::kBadInput
-                                                                                             : ErrorCode::kIo;
+    const ErrorCode code =
+        ec == std::errc::not_a_directory || ec == std::errc::file_exists ? ErrorCode::kBadInput : ErrorCode::kIo;
     return R::Failure(out.string() + ": cannot create the directory (" + ec.message() + ")", code);
   }
   static std::atomic<int> counter{0};
@@ -66,8 +66,7 @@ Status StagedDirectory::Commit(const std::string& last) {
   for (const fs::path& f : files) {
     fs::rename(f, out_ / f.filename(), ec);
     if (ec)
-      return Status::Failure((out_ / f.filename()).string() + ": cannot write (" + ec.message() + ")",
-                             ErrorCode::kIo);
+      return Status::Failure((out_ / f.filename()).string() + ": cannot write (" + ec.message() + ")", ErrorCode::kIo);
   }
   committed_ = true;
   return Ok();

@@ -100,8 +100,8 @@ void Run(const MetricsCliOptions& o) {
   if (!o.video.empty()) {
     observer = [&](const m::ObservedFrame& frame) -> Status {
       if (!video) {
-        auto opened = m::SideBySideVideo::Open(o.video, frame.test.cols, frame.test.rows, frame.fps,
-                                               frame.has_reference);
+        auto opened =
+            m::SideBySideVideo::Open(o.video, frame.test.cols, frame.test.rows, frame.fps, frame.has_reference);
         if (!opened) return opened.failure();
         video = std::move(*opened);
       }

@@ -47,9 +47,9 @@ void RequireRepresentable(const std::vector<double>& values, const char* option,
   for (double v : values) {
     const bool fits = in_float ? std::isfinite(float(factor) * float(v)) : std::isfinite(factor * v);
     if (!fits)
-      throw UsageError(std::string(option) + " " + Number(v) + " is out of range for --precision " + precision +
-                       " (" + (factor == 1 ? "" : Number(factor) + " x ") + "|value| must be at most " +
-                       Number(largest) + ")");
+      throw UsageError(std::string(option) + " " + Number(v) + " is out of range for --precision " + precision + " (" +
+                       (factor == 1 ? "" : Number(factor) + " x ") + "|value| must be at most " + Number(largest) +
+                       ")");
   }
 }
 
@@ -111,17 +111,12 @@ void Run(const NdfOptions& o) {
   }
 
   nlohmann::json params = nlohmann::json::object();
-  for (const shading::ParamInfo& p : info->params)
-    params[std::string(p.name)] = shading::ParamValue(resolved, p.name);
+  for (const shading::ParamInfo& p : info->params) params[std::string(p.name)] = shading::ParamValue(resolved, p.name);
   double ax = o.alpha[0], ay = o.alpha.size() > 1 ? o.alpha[1] : o.alpha[0];
-  nlohmann::json out = {{"variant", o.variant},
-                        {"ndf", o.ndf},
-                        {"precision", o.precision},
-                        {"alpha", {ax, ay}},
-                        {"slope", o.slope},
-                        {"footprint", o.footprint},
-                        {"params", params},
-                        {"slope_density", slope_density},
+  nlohmann::json out = {{"variant", o.variant},     {"ndf", o.ndf},
+                        {"precision", o.precision}, {"alpha", {ax, ay}},
+                        {"slope", o.slope},         {"footprint", o.footprint},
+                        {"params", params},         {"slope_density", slope_density},
                         {"density", density}};
   if (info->widens_roughness) out["alpha_eff"] = {aex, aey};
   if (o.json) {

@@ -26,8 +26,8 @@ void RequireParentDirectory(const std::string& option, const std::string& path) 
   // Also found before the work: a directory the user may not write to is the system's answer, not bad input.
   const std::string dir = parent.empty() ? "." : parent.string();
   if (::access(dir.c_str(), W_OK | X_OK) != 0)
-    throw CommandError(Error{ErrorCode::kIo, option + " " + path + ": cannot write into " + dir + " (" +
-                                                 SystemReason(errno) + ")"});
+    throw CommandError(
+        Error{ErrorCode::kIo, option + " " + path + ": cannot write into " + dir + " (" + SystemReason(errno) + ")"});
 }
 
 void RequireCreatableDirectory(const std::string& option, const std::string& path) {
@@ -39,8 +39,8 @@ void RequireCreatableDirectory(const std::string& option, const std::string& pat
   if (!std::filesystem::is_directory(dir, ec))
     throw UsageError(option + " " + path + ": " + dir + " is not a directory");
   if (::access(dir.c_str(), W_OK | X_OK) != 0)
-    throw CommandError(Error{ErrorCode::kIo, option + " " + path + ": cannot write into " + dir + " (" +
-                                                 SystemReason(errno) + ")"});
+    throw CommandError(
+        Error{ErrorCode::kIo, option + " " + path + ": cannot write into " + dir + " (" + SystemReason(errno) + ")"});
 }
 
 NewDirectories::~NewDirectories() {

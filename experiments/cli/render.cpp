@@ -36,8 +36,8 @@ struct RenderOptions {
 void PrintProgress(int done, int total) {
   const int width = 30;
   int filled = total > 0 ? done * width / total : width;
-  std::fprintf(stderr, "\r[%.*s%*s] %d/%d frames", filled, "##############################", width - filled, "",
-               done, total);
+  std::fprintf(stderr, "\r[%.*s%*s] %d/%d frames", filled, "##############################", width - filled, "", done,
+               total);
   if (done == total) std::fprintf(stderr, "\n");
   std::fflush(stderr);
 }

@@ -37,9 +37,9 @@ void PrintProgress(const experiments::RunProgress& p, bool tty) {
   const int filled = p.total ? width * p.done / p.total : width;
   std::string bar(filled, '#');
   bar.resize(width, '.');
-  std::fprintf(stderr, "%s[%s] %d/%d jobs, %d left (%d already done), elapsed %s, ETA %s  %s%s",
-               tty ? "\r" : "", bar.c_str(), p.done, p.total, p.total - p.done, p.skipped,
-               Duration(p.elapsed_s).c_str(), Duration(p.eta_s).c_str(), p.current.c_str(), tty ? "\033[K" : "\n");
+  std::fprintf(stderr, "%s[%s] %d/%d jobs, %d left (%d already done), elapsed %s, ETA %s  %s%s", tty ? "\r" : "",
+               bar.c_str(), p.done, p.total, p.total - p.done, p.skipped, Duration(p.elapsed_s).c_str(),
+               Duration(p.eta_s).c_str(), p.current.c_str(), tty ? "\033[K" : "\n");
   if (tty && p.done == p.total) std::fprintf(stderr, "\n");
 }
 
@@ -84,8 +84,7 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("--db", o->db, "Results store (default runs/<spec name>/results.db)");
   cmd->add_option("--work", o->work, "Frame cache directory (default runs/<spec name>/frames)");
   cmd->add_option("--shard", o->shard, "Run the deterministic slice i/n of the jobs")->capture_default_str();
-  cmd->add_option("--jobs", o->jobs,
-                  "Jobs measured at once (each renders on the device, then measures on the CPU)")
+  cmd->add_option("--jobs", o->jobs, "Jobs measured at once (each renders on the device, then measures on the CPU)")
       ->capture_default_str();
   cmd->add_flag("--keep-frames", o->keep_frames, "Keep rendered frames after measuring");
   cmd->add_option("--device", o->device, "Vulkan device name substring");

@@ -7,9 +7,9 @@
 #include <sstream>
 
 #include "commands.h"
-#include "shimmer/experiments/job.h"
 #include "shimmer/core/gnuplot.h"
 #include "shimmer/experiments/csv.h"
+#include "shimmer/experiments/job.h"
 #include "shimmer/experiments/output_files.h"
 #include "shimmer/experiments/runner.h"
 #include "shimmer/experiments/spec.h"
@@ -102,8 +102,8 @@ void Run(const SweepOptions& o) {
     if (!header) {
       // As `run` does: the spec's highlight mask, where the reference has highlights.
       std::printf("region: %s\n", j.value("region", std::string("frame")).c_str());
-      std::printf("%12s %10s %10s %12s %10s %13s %12s\n", name.c_str(), "tv_ratio", "tv_err", "energy_bias",
-                  "relmse", "flicker_index", "ms/frame");
+      std::printf("%12s %10s %10s %12s %10s %13s %12s\n", name.c_str(), "tv_ratio", "tv_err", "energy_bias", "relmse",
+                  "flicker_index", "ms/frame");
       header = true;
     }
     const double fi = experiments::FlickerIndex(j);

@@ -206,8 +206,8 @@ FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::funct
         // The cost of the evaluations as recorded when each was computed, so
         // a rerun served from the cache reports the same time.
         for (const std::string& id : used) fit.seconds += measure.WallSeconds(id);
-        if (Status s = store->InsertFit(variant, config.param, material, fit.search.best, fit.train.j,
-                                        fit.validate.j, fit.ToJson());
+        if (Status s = store->InsertFit(variant, config.param, material, fit.search.best, fit.train.j, fit.validate.j,
+                                        fit.ToJson());
             !s) {
           outcome.error = s.failure();
           return outcome;

@@ -85,8 +85,8 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
          << "plot ";
     int block = 0;
     for (const MaterialFit* f : fits) {
-      md << "| " << f->material << " | " << FormatNumber(f->alpha) << " | **" << FormatNumber(f->search.best)
-         << "** | " << FormatNumber(f->train.j) << " | " << FormatNumber(f->validate.j) << " |";
+      md << "| " << f->material << " | " << FormatNumber(f->alpha) << " | **" << FormatNumber(f->search.best) << "** | "
+         << FormatNumber(f->train.j) << " | " << FormatNumber(f->validate.j) << " |";
       for (std::size_t i = 0; i < f->defaults.size(); ++i)
         md << " " << FormatNumber(f->train_defaults[i].j) << " | " << FormatNumber(f->validate_defaults[i].j) << " |";
       md << " " << f->search.evaluations << " | " << FormatNumber(f->seconds, "%.0f") << " |\n";
@@ -97,7 +97,8 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
       data << "\n\n# " << f->material << " optimum\n" << f->search.best << " " << f->train.j << "\n\n\n";
       plot << (block ? ", \\\n     " : "") << "'" << slug << ".dat' index " << 2 * block
            << " using 1:2 with linespoints pt 7 ps 0.5 title '" << f->material << "', \\\n     '' index "
-           << 2 * block + 1 << " using 1:2 with points pt 6 ps 2 lc 'black' " << (block ? "notitle" : "title 'optimum'");
+           << 2 * block + 1 << " using 1:2 with points pt 6 ps 2 lc 'black' "
+           << (block ? "notitle" : "title 'optimum'");
       ++block;
     }
     plot << "\n";
@@ -115,8 +116,8 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
          << l.param << "(α) = " << FormatNumber(l.law.a) << " · α^" << FormatNumber(l.law.b) << "**\n\n"
          << "| material | α | fitted | closed form | log residual |\n|---|---|---|---|---|\n";
       for (std::size_t i = 0; i < l.alpha.size(); ++i)
-        md << "| " << l.materials[i] << " | " << FormatNumber(l.alpha[i]) << " | " << FormatNumber(l.value[i])
-           << " | " << FormatNumber(l.law.a * std::pow(l.alpha[i], l.law.b)) << " | "
+        md << "| " << l.materials[i] << " | " << FormatNumber(l.alpha[i]) << " | " << FormatNumber(l.value[i]) << " | "
+           << FormatNumber(l.law.a * std::pow(l.alpha[i], l.law.b)) << " | "
            << FormatNumber(l.law.residuals[i], "%+.3f") << " |\n";
     }
     md << "\n";

@@ -7,8 +7,8 @@
 
 #include "report_parts.h"
 #include "shimmer/core/gnuplot.h"
-#include "shimmer/renderer/shading.h"
 #include "shimmer/experiments/output_files.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::experiments {
 

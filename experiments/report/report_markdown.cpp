@@ -46,9 +46,8 @@ std::string Markdown(const std::vector<Group>& groups, const std::string& title,
     const Costs costs = CostsOf(group);
     const std::vector<double>& err = costs.tv_err;
     const std::string slug = Slug(group.key);
-    md << "## " << group.key << "\n\n![speed against tv_err](" << slug
-       << "_pareto_tv_err.svg) ![speed against relmse](" << slug << "_pareto_relmse.svg) ![flicker spectra](" << slug
-       << "_spectra.svg)\n\n"
+    md << "## " << group.key << "\n\n![speed against tv_err](" << slug << "_pareto_tv_err.svg) ![speed against relmse]("
+       << slug << "_pareto_relmse.svg) ![flicker spectra](" << slug << "_spectra.svg)\n\n"
        << "| variant | region | tv_ratio | tv_err | energy_bias | temporal_diff_err | relmse | flicker_index | "
           "ms/frame | Pareto tv_err | Pareto relmse |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
     int best = -1, best_any = -1;

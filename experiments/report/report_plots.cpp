@@ -30,8 +30,8 @@ std::vector<PlotFile> Plots(const Group& group) {
   std::ostringstream pts;
   pts << "# ms_per_frame tv_err relmse pareto_tv_err pareto_relmse label\n";
   for (std::size_t i = 0; i < group.rows.size(); ++i)
-    pts << c.ms[i] << " " << c.tv_err[i] << " " << c.relmse[i] << " " << c.front_tv_err[i] << " "
-        << c.front_relmse[i] << " \"" << Label(*group.rows[i]) << "\"\n";
+    pts << c.ms[i] << " " << c.tv_err[i] << " " << c.relmse[i] << " " << c.front_tv_err[i] << " " << c.front_relmse[i]
+        << " \"" << Label(*group.rows[i]) << "\"\n";
   pts << "\n\n# supersample-N curve\n";
   for (std::size_t i = 0; i < group.rows.size(); ++i)
     if (IsSupersample(*group.rows[i]))

@@ -2,19 +2,19 @@
 
 #include <atomic>
 #include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <thread>
-#include <filesystem>
-#include <fstream>
 
 #include <nlohmann/json.hpp>
 
 #include "shimmer/core/sequence_file.h"
 
+#include "shimmer/metrics/metrics_report.h"
 #include "shimmer/renderer/renderer.h"
 #include "shimmer/renderer/scene.h"
-#include "shimmer/metrics/metrics_report.h"
 
 namespace shimmer::experiments {
 
@@ -138,9 +138,9 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
   for (const Job& job : jobs) {
     auto settings = JobSettings(job, options);
     if (!settings) {
-      summary.error = Prefixed("job " + JobId(job) + " (" + job.scene + " " + job.material + " " + job.camera + " " +
-                                   job.variant + ")",
-                               settings.failure());
+      summary.error = Prefixed(
+          "job " + JobId(job) + " (" + job.scene + " " + job.material + " " + job.camera + " " + job.variant + ")",
+          settings.failure());
       return summary;
     }
   }
@@ -208,7 +208,10 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
         seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       }
       std::lock_guard<std::mutex> lock(mutex);
-      if (*done) ++summary.skipped; else ++summary.computed, computed_s += seconds;
+      if (*done)
+        ++summary.skipped;
+      else
+        ++summary.computed, computed_s += seconds;
       ++progress.done;
       progress.skipped = summary.skipped;
       progress.current = what;

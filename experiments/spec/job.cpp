@@ -9,11 +9,20 @@ namespace shimmer::experiments {
 using nlohmann::json;
 
 json Job::ToJson() const {
-  return {{"scene", scene},   {"material", material},       {"camera", camera},
-          {"variant", variant}, {"params", params},         {"derivatives", derivatives},
-          {"width", width},   {"height", height},           {"frames", frames},
-          {"fps", fps},       {"reference_spp", reference.spp}, {"reference_tolerance", reference.tolerance},
-          {"highlight_mask", metrics.highlight_mask}, {"highlight_threshold", metrics.highlight_threshold},
+  return {{"scene", scene},
+          {"material", material},
+          {"camera", camera},
+          {"variant", variant},
+          {"params", params},
+          {"derivatives", derivatives},
+          {"width", width},
+          {"height", height},
+          {"frames", frames},
+          {"fps", fps},
+          {"reference_spp", reference.spp},
+          {"reference_tolerance", reference.tolerance},
+          {"highlight_mask", metrics.highlight_mask},
+          {"highlight_threshold", metrics.highlight_threshold},
           {"segment", metrics.segment}};
 }
 
@@ -137,10 +146,16 @@ std::string JobIdForCore(const Job& job, std::string_view core_version) {
 }
 
 std::string ReferenceId(const Job& job) {
-  json j = {{"scene", job.scene},     {"material", job.material}, {"camera", job.camera},
-            {"width", job.width},     {"height", job.height},     {"frames", job.frames},
-            {"fps", job.fps},         {"reference_spp", job.reference.spp},
-            {"reference_tolerance", job.reference.tolerance},     {"core", ShadingCoreVersion()}};
+  json j = {{"scene", job.scene},
+            {"material", job.material},
+            {"camera", job.camera},
+            {"width", job.width},
+            {"height", job.height},
+            {"frames", job.frames},
+            {"fps", job.fps},
+            {"reference_spp", job.reference.spp},
+            {"reference_tolerance", job.reference.tolerance},
+            {"core", ShadingCoreVersion()}};
   return Fnv1a64Hex(j.dump());
 }
 

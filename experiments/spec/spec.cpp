@@ -80,15 +80,17 @@ std::string Short(double x) {
 // A spec's name names its directories (runs/<name>/...): one path component.
 void CheckName(const std::string& name) {
   if (name.empty() || name.size() > 64) throw SpecError{"name", "must be 1 to 64 characters"};
-  if (name.front() == '.' || name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789._-") != std::string::npos)
-    throw SpecError{"name", "must be letters, digits, '.', '_' or '-', not starting with '.' (it names the run's "
-                            "directory), found " + Quote(json(name))};
+  if (name.front() == '.' ||
+      name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789._-") != std::string::npos)
+    throw SpecError{"name",
+                    "must be letters, digits, '.', '_' or '-', not starting with '.' (it names the run's "
+                    "directory), found " +
+                        Quote(json(name))};
 }
 
 shading::DerivativeSource Derivatives(const json& j, const std::string& key) {
   const auto source = j.is_string() ? shading::ParseDerivativeSource(j.get<std::string>()) : std::nullopt;
-  if (!source)
-    throw SpecError{key, "must be " + std::string(shading::kDerivativeSourceList) + ", found " + Quote(j)};
+  if (!source) throw SpecError{key, "must be " + std::string(shading::kDerivativeSourceList) + ", found " + Quote(j)};
   return *source;
 }
 
@@ -180,10 +182,9 @@ ShotSet ParseShots(const json& j, const std::string& key) {
 // against the spec's materials.
 FitConfig ParseFit(const json& f, const Spec& spec) {
   if (!f.is_object()) throw SpecError{"fit", "entries must be objects"};
-  RejectUnknownKeys(f,
-                    {"variants", "param", "bounds", "sweep_points", "defaults", "derivatives", "train", "validate",
-                     "weights"},
-                    "fit");
+  RejectUnknownKeys(
+      f, {"variants", "param", "bounds", "sweep_points", "defaults", "derivatives", "train", "validate", "weights"},
+      "fit");
   for (const char* required : {"variants", "param", "train", "validate"})
     if (!f.contains(required)) throw SpecError{"fit", std::string("needs \"") + required + "\""};
   FitConfig c;
@@ -200,8 +201,8 @@ FitConfig ParseFit(const json& f, const Spec& spec) {
       names += (names.empty() ? "" : ", ") + std::string(p.name);
     }
     if (!has)
-      throw SpecError{name, "has no parameter \"" + c.param + "\" to fit (its parameters: " +
-                                (names.empty() ? "none" : names) + ")"};
+      throw SpecError{name, "has no parameter \"" + c.param +
+                                "\" to fit (its parameters: " + (names.empty() ? "none" : names) + ")"};
     if (info->ggx_only)
       for (const std::string& m : spec.materials)
         if (scene::ParseMaterial(m, {})->ndf != shading::Ndf::kGgx)
@@ -215,8 +216,8 @@ FitConfig ParseFit(const json& f, const Spec& spec) {
   }
   // The search runs on log p, so the bounds must be positive.
   if (!(c.lo > 0 && c.lo < c.hi))
-    throw SpecError{"bounds", "are empty or not positive: need 0 < lo < hi, found [" + Short(c.lo) + ", " +
-                                  Short(c.hi) + "]"};
+    throw SpecError{"bounds",
+                    "are empty or not positive: need 0 < lo < hi, found [" + Short(c.lo) + ", " + Short(c.hi) + "]"};
   if (Status s = shading::ValidateParam(c.param, c.hi); !s) throw SpecError{"bounds", s.error()};
   if (f.contains("sweep_points")) c.sweep_points = PositiveInt(f["sweep_points"], "sweep_points", kMaxSweepPoints);
   if (c.sweep_points < 2) throw SpecError{"sweep_points", "must be at least 2"};
@@ -267,8 +268,7 @@ Spec ParseSpecObject(const json& j) {
   }
   s.cameras = StringList(j["cameras"], "cameras");
   for (const std::string& c : s.cameras) CheckCamera(c);
-  if (!j["variants"].is_array() || j["variants"].empty())
-    throw SpecError{"variants", "must be a non-empty array"};
+  if (!j["variants"].is_array() || j["variants"].empty()) throw SpecError{"variants", "must be a non-empty array"};
   for (const json& v : j["variants"]) s.variants.push_back(ParseVariant(v));
   if (j.contains("derivatives")) {
     s.derivatives = StringList(j["derivatives"], "derivatives");
@@ -294,8 +294,7 @@ Spec ParseSpecObject(const json& j) {
     if (r.contains("spp")) s.reference.spp = PositiveInt(r["spp"], "spp", render::kMaxReferenceSpp);
     if (r.contains("tolerance")) {
       s.reference.tolerance = Number(r["tolerance"], "tolerance");
-      if (s.reference.tolerance <= 0 || s.reference.tolerance >= 1)
-        throw SpecError{"tolerance", "must be in (0, 1)"};
+      if (s.reference.tolerance <= 0 || s.reference.tolerance >= 1) throw SpecError{"tolerance", "must be in (0, 1)"};
     }
   }
   if (j.contains("metrics")) {

@@ -51,11 +51,35 @@ struct Statement {
 
 // Columns of `jobs` in the order Insert writes them; a store from before a
 // column existed reads NULL for it.
-const char* kJobColumns[] = {"id", "reference_id", "scene", "material", "camera", "variant", "params",
-                             "derivatives", "width", "height", "frames", "fps", "reference_spp",
-                             "reference_tolerance", "tv_ratio", "tv_err", "energy_bias", "temporal_diff_err",
-                             "relmse", "flicker_index", "metrics", "job", "gpu_ms_per_frame", "wall_s", "revision",
-                             "core_version", "finished_at", "device", "driver"};
+const char* kJobColumns[] = {"id",
+                             "reference_id",
+                             "scene",
+                             "material",
+                             "camera",
+                             "variant",
+                             "params",
+                             "derivatives",
+                             "width",
+                             "height",
+                             "frames",
+                             "fps",
+                             "reference_spp",
+                             "reference_tolerance",
+                             "tv_ratio",
+                             "tv_err",
+                             "energy_bias",
+                             "temporal_diff_err",
+                             "relmse",
+                             "flicker_index",
+                             "metrics",
+                             "job",
+                             "gpu_ms_per_frame",
+                             "wall_s",
+                             "revision",
+                             "core_version",
+                             "finished_at",
+                             "device",
+                             "driver"};
 
 std::string SqlQuote(const std::string& text) {
   std::string out = "'";
@@ -236,7 +260,8 @@ Status ResultStore::Insert(const JobResult& r) {
   real(r.job.fps);
   sqlite3_bind_int(s.stmt, i++, r.job.reference.spp);
   real(r.job.reference.tolerance);
-  for (const char* key : {"tv_ratio", "tv_err", "energy_bias", "temporal_diff_err", "relmse"}) real(Metric(r.metrics, key));
+  for (const char* key : {"tv_ratio", "tv_err", "energy_bias", "temporal_diff_err", "relmse"})
+    real(Metric(r.metrics, key));
   real(FlickerIndex(r.metrics));
   text(r.metrics.dump());
   text(r.job.ToJson().dump());
@@ -268,9 +293,8 @@ Result<std::vector<JobResult>> ResultStore::Select(const std::string& where, con
   std::vector<JobResult> rows;
   Statement s;
   const std::string device_columns = has_device_columns_ ? "device, driver" : "NULL, NULL";
-  const std::string sql =
-      "SELECT id, reference_id, metrics, gpu_ms_per_frame, wall_s, revision, core_version, job, " + device_columns +
-      " FROM jobs " + where + " ORDER BY id";
+  const std::string sql = "SELECT id, reference_id, metrics, gpu_ms_per_frame, wall_s, revision, core_version, job, " +
+                          device_columns + " FROM jobs " + where + " ORDER BY id";
   if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &s.stmt, nullptr) != SQLITE_OK) return Failure("cannot read the jobs");
   if (!id.empty()) sqlite3_bind_text(s.stmt, 1, id.c_str(), -1, SQLITE_TRANSIENT);
   auto str = [&](int c) {
@@ -356,7 +380,8 @@ Result<std::size_t> MergeStores(const std::vector<std::string>& inputs, const st
       return R::Failure(in + ": cannot open the results store (" + s.error() + ")", s.code());
     const std::set<std::string> columns = ColumnsOf(db.get(), "other");
     std::string select;
-    for (const char* c : kJobColumns) select += (select.empty() ? "" : ", ") + (columns.count(c) ? std::string(c) : "NULL");
+    for (const char* c : kJobColumns)
+      select += (select.empty() ? "" : ", ") + (columns.count(c) ? std::string(c) : "NULL");
     Status copied = columns.count("id") && columns.count("job")
                         ? ExecOn(db.get(), "INSERT OR IGNORE INTO main.jobs SELECT " + select + " FROM other.jobs;")
                         : Status::Failure("not a shimmer results store (it has no jobs table)");
@@ -422,12 +447,15 @@ Result<std::unique_ptr<StoreLock>> StoreLock::Acquire(const std::string& store_p
       ::close(fd);
       // Not bad input: the same command works once the other runner is done.
       if (e == EWOULDBLOCK)
-        return R::Failure(store_path + ": another shimmer process is running jobs into this store; wait for it to "
-                          "finish (one runner per store, lock " + lock_path + ")",
+        return R::Failure(store_path +
+                              ": another shimmer process is running jobs into this store; wait for it to "
+                              "finish (one runner per store, lock " +
+                              lock_path + ")",
                           ErrorCode::kBusy);
       return R::Failure(lock_path + ": cannot lock (" + SystemReason(e) + ")", ErrorCode::kIo);
     }
-    struct stat held {}, named {};
+    struct stat held {
+    }, named{};
     if (::fstat(fd, &held) == 0 && ::stat(lock_path.c_str(), &named) == 0 && held.st_dev == named.st_dev &&
         held.st_ino == named.st_ino)
       return std::unique_ptr<StoreLock>(new StoreLock(fd, lock_path, created));

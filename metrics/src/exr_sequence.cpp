@@ -1,18 +1,17 @@
 #include "shimmer/metrics/exr_sequence.h"
 
-
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <optional>
 #include <set>
 
-#include <opencv2/imgcodecs.hpp>
 #include <tbb/parallel_for.h>
+#include <opencv2/imgcodecs.hpp>
 
+#include "shimmer/core/atomic_file.h"
 #include "shimmer/core/exr_input.h"
 #include "shimmer/core/sequence_file.h"
-#include "shimmer/core/atomic_file.h"
 
 namespace shimmer::metrics {
 
@@ -90,7 +89,8 @@ Result<std::vector<fs::path>> ListExrFiles(const fs::path& dir) {
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
     if (ext == ".exr") frames.push_back(it->path());
   }
-  if (ec) return Result<std::vector<fs::path>>::Failure(dir.string() + ": cannot list directory (" + ec.message() + ")");
+  if (ec)
+    return Result<std::vector<fs::path>>::Failure(dir.string() + ": cannot list directory (" + ec.message() + ")");
   std::sort(frames.begin(), frames.end(),
             [](const fs::path& a, const fs::path& b) { return a.filename().string() < b.filename().string(); });
   return frames;
@@ -116,9 +116,8 @@ FrameCheck CheckFrame(const fs::path& frame, const ExrSequence& seq) {
   auto layers = ReadLayerMap(frame, &size);
   if (!layers) return {layers.error()};
   if (size.width != seq.width || size.height != seq.height)
-    return {frame.string() + ": frame is " + std::to_string(size.width) + "x" + std::to_string(size.height) +
-            " but " + seq.frames[0].filename().string() + " is " + std::to_string(seq.width) + "x" +
-            std::to_string(seq.height)};
+    return {frame.string() + ": frame is " + std::to_string(size.width) + "x" + std::to_string(size.height) + " but " +
+            seq.frames[0].filename().string() + " is " + std::to_string(seq.width) + "x" + std::to_string(seq.height)};
   auto it = layers->find(seq.layer);
   if (it == layers->end())
     return {frame.string() + ": no layer '" + seq.layer + "' (layers: " + Join(LuminanceLayers(*layers)) + ")"};
@@ -131,14 +130,14 @@ FrameCheck CheckFrame(const fs::path& frame, const ExrSequence& seq) {
 }
 
 // One layer's luminance (and motion) from an open file.
-Result<LuminanceFrame> ReadLayer(const ExrInput& in, const fs::path& file, const std::string& layer, int width, int height,
-                        bool with_motion) {
+Result<LuminanceFrame> ReadLayer(const ExrInput& in, const fs::path& file, const std::string& layer, int width,
+                                 int height, bool with_motion) {
   using R = Result<LuminanceFrame>;
   LayerMap layers = MapLayers(in);
   auto it = layers.find(layer);
   if (it == layers.end() || !HasLuminance(it->second))
-    return R::Failure(file.string() + ": no layer '" + layer + "' with R,G,B (layers: " +
-                      Join(LuminanceLayers(layers)) + ")");
+    return R::Failure(file.string() + ": no layer '" + layer +
+                      "' with R,G,B (layers: " + Join(LuminanceLayers(layers)) + ")");
   const auto& components = it->second;
   const bool rgb = components.count("R") && components.count("G") && components.count("B");
   if (with_motion && !HasMotion(layers)) return R::Failure(file.string() + ": no motion.X/motion.Y channels");
@@ -165,9 +164,8 @@ Result<LuminanceFrame> ReadLayer(const ExrInput& in, const fs::path& file, const
     const ExrPartInfo& part = in.parts()[p];
     if (part.deep) return R::Failure(file.string() + ": deep EXR images are not supported");
     if (part.width != width || part.height != height)
-      return R::Failure(file.string() + ": frame is " + std::to_string(part.width) + "x" +
-                        std::to_string(part.height) + ", expected " + std::to_string(width) + "x" +
-                        std::to_string(height));
+      return R::Failure(file.string() + ": frame is " + std::to_string(part.width) + "x" + std::to_string(part.height) +
+                        ", expected " + std::to_string(width) + "x" + std::to_string(height));
     std::vector<ExrPlaneRequest> requests;
     for (const auto& [ref, plane] : wanted) {
       if (ref.part != p) continue;
@@ -184,8 +182,7 @@ Result<LuminanceFrame> ReadLayer(const ExrInput& in, const fs::path& file, const
     for (int y = 0; y < height; ++y) {
       const float *pr = r.ptr<float>(y), *pg = g.ptr<float>(y), *pb = b.ptr<float>(y);
       float* out = frame.luminance.ptr<float>(y);
-      for (int x = 0; x < width; ++x)
-        out[x] = static_cast<float>(kLumaR * pr[x] + kLumaG * pg[x] + kLumaB * pb[x]);
+      for (int x = 0; x < width; ++x) out[x] = static_cast<float>(kLumaR * pr[x] + kLumaG * pg[x] + kLumaB * pb[x]);
     }
   } else {
     frame.luminance = r;
@@ -270,8 +267,9 @@ Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& re
     else if (seq.layers.size() == 1)
       seq.layer = seq.layers[0];
     else
-      return R::Failure(seq.frames[0].string() + ": no 'specular' layer and no R,G,B channels; pick one with --layer (" +
-                        Join(seq.layers) + ")");
+      return R::Failure(seq.frames[0].string() +
+                        ": no 'specular' layer and no R,G,B channels; pick one with --layer (" + Join(seq.layers) +
+                        ")");
   } else {
     seq.layer = request.layer;
   }
@@ -290,7 +288,8 @@ Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& re
   return seq;
 }
 
-Result<LuminanceFrame> ReadFrame(const fs::path& file, const std::string& layer, int width, int height, bool with_motion) {
+Result<LuminanceFrame> ReadFrame(const fs::path& file, const std::string& layer, int width, int height,
+                                 bool with_motion) {
   auto in = ExrInput::Open(file, /*whole_file=*/true);
   if (!in) return Result<LuminanceFrame>::Failure(in.error());
   return ReadLayer(*in, file, layer, width, height, with_motion);

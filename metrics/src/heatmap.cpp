@@ -22,8 +22,8 @@ cv::Mat DivergingLut() {
   for (int i = 0; i < 256; ++i) {
     double t = i / 255.0;
     cv::Vec3d c = t < 0.5 ? blue + (white - blue) * (t / 0.5) : white + (red - white) * ((t - 0.5) / 0.5);
-    lut.at<cv::Vec3b>(i) = cv::Vec3b(cv::saturate_cast<uchar>(c[0]), cv::saturate_cast<uchar>(c[1]),
-                                     cv::saturate_cast<uchar>(c[2]));
+    lut.at<cv::Vec3b>(i) =
+        cv::Vec3b(cv::saturate_cast<uchar>(c[0]), cv::saturate_cast<uchar>(c[1]), cv::saturate_cast<uchar>(c[2]));
   }
   return lut;
 }
@@ -117,9 +117,10 @@ cv::Mat RenderHeatmap(const cv::Mat& values, const cv::Mat& region, HeatmapScali
   cv::Mat bar_values(bar_h, 1, CV_64F);
   for (int i = 0; i < bar_h; ++i) {
     double t = 1.0 - static_cast<double>(i) / (bar_h - 1);
-    bar_values.at<double>(i) = scaling == HeatmapScaling::kLog
-                                   ? std::pow(10.0, std::log10(range.lo) + t * (std::log10(range.hi) - std::log10(range.lo)))
-                                   : range.lo + t * (range.hi - range.lo);
+    bar_values.at<double>(i) =
+        scaling == HeatmapScaling::kLog
+            ? std::pow(10.0, std::log10(range.lo) + t * (std::log10(range.hi) - std::log10(range.lo)))
+            : range.lo + t * (range.hi - range.lo);
   }
   cv::Mat bar = ColourMap(bar_values, scaling, range);
   cv::resize(bar, bar, cv::Size(bar_w, bar_h), 0, 0, cv::INTER_NEAREST);

@@ -184,8 +184,7 @@ Status MetricsAccumulator::Finish(MetricsReport* report) {
     if (*report->tv_ref > 0) report->tv_ratio = report->tv_test / *report->tv_ref;
     cv::Mat mean_test = moments_test_.MeanMap(), mean_ref = moments_ref_.MeanMap();
     // Every good pixel has all N samples, so sum_t = N * mean_t.
-    report->energy_bias =
-        RelativeBias(MeanOver(mean_test, good, 1) * frames, MeanOver(mean_ref, good, 1) * frames);
+    report->energy_bias = RelativeBias(MeanOver(mean_test, good, 1) * frames, MeanOver(mean_ref, good, 1) * frames);
     report->energy_bias_map = EnergyBiasMap(mean_test, mean_ref, good, cv::Mat());
     report->temporal_diff_err = MeanOver(diff_err_, good, used) / (frames - 1);
     if (!rmse_per_frame_.empty()) {

@@ -56,10 +56,9 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
                       " frame; temporal metrics need at least 2");
 
   const FlickerSignal signal = options.signal.value_or(has_ref ? FlickerSignal::kError : FlickerSignal::kTest);
-  if (signal == FlickerSignal::kError && !has_ref)
-    return R::Failure("--signal error needs a reference sequence (REF)");
-  const int segment_length = options.segment_length > 0 ? options.segment_length
-                                                        : std::min(frames, kDefaultSegmentLength);
+  if (signal == FlickerSignal::kError && !has_ref) return R::Failure("--signal error needs a reference sequence (REF)");
+  const int segment_length =
+      options.segment_length > 0 ? options.segment_length : std::min(frames, kDefaultSegmentLength);
   if (segment_length < 2 || segment_length > frames)
     return R::Failure("--segment " + std::to_string(segment_length) + " must be between 2 and the frame count (" +
                       std::to_string(frames) + ")");
@@ -137,7 +136,8 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
     accumulator.AddFrame(T, Rf, current->test.motion, test->frames[t].string(),
                          has_ref ? reference->frames[t].string() : std::string());
     if (observer) {
-      Status s = observer(ObservedFrame{t, test->fps, has_ref, T, has_ref ? Rf : (t > 0 ? previous.test.luminance : T)});
+      Status s =
+          observer(ObservedFrame{t, test->fps, has_ref, T, has_ref ? Rf : (t > 0 ? previous.test.luminance : T)});
       if (!s) return s.failure();
     }
     reading.wait();
@@ -182,14 +182,14 @@ nlohmann::json ToJson(const MetricsReport& r) {
     j["relmse"] = optional(r.relmse);
   }
   if (r.warp_err) j["warp_err"] = *r.warp_err;
-  j["flicker"] = {{"signal", r.flicker.signal},
-                  {"segment_length", r.flicker.segment_length},
-                  {"segments", r.flicker.segments},
-                  {"freq_hz", r.flicker.freq_hz},
-                  {"psd", r.flicker.psd},
-                  {"bands", {{"0-2Hz", r.flicker.band_low}, {"2-8Hz", r.flicker.band_mid},
-                             {"8Hz-nyquist", r.flicker.band_high}}},
-                  {"flicker_index", r.flicker.flicker_index}};
+  j["flicker"] = {
+      {"signal", r.flicker.signal},
+      {"segment_length", r.flicker.segment_length},
+      {"segments", r.flicker.segments},
+      {"freq_hz", r.flicker.freq_hz},
+      {"psd", r.flicker.psd},
+      {"bands", {{"0-2Hz", r.flicker.band_low}, {"2-8Hz", r.flicker.band_mid}, {"8Hz-nyquist", r.flicker.band_high}}},
+      {"flicker_index", r.flicker.flicker_index}};
   j["warnings"] = r.warnings;
   return j;
 }

@@ -28,8 +28,8 @@ cv::Mat DisplayGrey(const cv::Mat& luminance) {
 
 }  // namespace
 
-Result<std::unique_ptr<SideBySideVideo>> SideBySideVideo::Open(const std::filesystem::path& file, int width,
-                                                               int height, double fps, bool with_reference) {
+Result<std::unique_ptr<SideBySideVideo>> SideBySideVideo::Open(const std::filesystem::path& file, int width, int height,
+                                                               double fps, bool with_reference) {
   using R = Result<std::unique_ptr<SideBySideVideo>>;
   std::error_code ec;
   // A missing directory is the user's typo, not a tree to create.

@@ -25,8 +25,8 @@ cv::Mat WarpPrevious(const cv::Mat& previous, const cv::Mat& motion) {
   return warped;
 }
 
-void WarpError::AddFrame(const cv::Mat& previous, const cv::Mat& current, const cv::Mat& motion,
-                         const cv::Mat& region, const cv::Mat& excluded) {
+void WarpError::AddFrame(const cv::Mat& previous, const cv::Mat& current, const cv::Mat& motion, const cv::Mat& region,
+                         const cv::Mat& excluded) {
   cv::Mat warped = WarpPrevious(previous, motion);
   for (int y = 0; y < current.rows; ++y) {
     const float* c = current.ptr<float>(y);

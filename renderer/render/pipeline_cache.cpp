@@ -74,8 +74,8 @@ std::string UserVariantError(const std::string& log, const std::string& user_fil
       errors.size() > 1 ? " (and " + std::to_string(errors.size() - 1) + " more compile errors)" : "";
   if (where.rfind(kUserVariantFile, 0) == 0)
     return user_file + where.substr(kUserVariantFile.size()) + ": " + problem + more;
-  return user_file + ": does not define " + std::string(kUserVariantSignature) + " (the kernel's call fails: " +
-         problem + ")";
+  return user_file + ": does not define " + std::string(kUserVariantSignature) +
+         " (the kernel's call fails: " + problem + ")";
 }
 
 struct SpirvCache {

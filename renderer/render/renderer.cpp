@@ -47,8 +47,7 @@ std::mutex& HooksMutex() {
 // The user's variant file, read whole; the error names it as they gave it.
 Result<std::string> ReadVariantFile(const std::string& path) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    return Result<std::string>::Failure(path + ": no such variant file");
+  if (!std::filesystem::is_regular_file(path, ec)) return Result<std::string>::Failure(path + ": no such variant file");
   std::ifstream in(path, std::ios::binary);
   std::ostringstream text;
   text << in.rdbuf();
@@ -75,12 +74,24 @@ TestHooks CurrentTestHooks() {
 
 std::vector<FrameChannel> FrameChannels(bool with_stderr) {
   std::vector<FrameChannel> c = {
-      {"R", kBeautyR},           {"G", kBeautyR + 1},           {"B", kBeautyR + 2},
-      {"specular.R", kSpecularR}, {"specular.G", kSpecularR + 1}, {"specular.B", kSpecularR + 2},
-      {"diffuse.R", kDiffuseR},   {"diffuse.G", kDiffuseR + 1},   {"diffuse.B", kDiffuseR + 2},
-      {"motion.X", kMotionX},     {"motion.Y", kMotionX + 1},     {"depth.Z", kDepth},
-      {"normal.X", kNormalX},     {"normal.Y", kNormalX + 1},     {"normal.Z", kNormalX + 2},
-      {"roughness.A", kRoughness}, {"footprint.X", kFootprintX},  {"footprint.Y", kFootprintX + 1},
+      {"R", kBeautyR},
+      {"G", kBeautyR + 1},
+      {"B", kBeautyR + 2},
+      {"specular.R", kSpecularR},
+      {"specular.G", kSpecularR + 1},
+      {"specular.B", kSpecularR + 2},
+      {"diffuse.R", kDiffuseR},
+      {"diffuse.G", kDiffuseR + 1},
+      {"diffuse.B", kDiffuseR + 2},
+      {"motion.X", kMotionX},
+      {"motion.Y", kMotionX + 1},
+      {"depth.Z", kDepth},
+      {"normal.X", kNormalX},
+      {"normal.Y", kNormalX + 1},
+      {"normal.Z", kNormalX + 2},
+      {"roughness.A", kRoughness},
+      {"footprint.X", kFootprintX},
+      {"footprint.Y", kFootprintX + 1},
   };
   if (with_stderr) c.push_back({"stderr.Y", kStderr});
   return c;
@@ -100,8 +111,8 @@ Result<std::vector<DeviceDescription>> ListDevices() {
 Status ValidateSettings(const RenderSettings& s) {
   auto fail = [](std::string message) { return Status::Failure(std::move(message)); };
   if (s.width < 1 || s.height < 1 || s.width > kMaxImageSide || s.height > kMaxImageSide)
-    return fail("width and height must be in 1.." + std::to_string(kMaxImageSide) + ", got " +
-                std::to_string(s.width) + "x" + std::to_string(s.height));
+    return fail("width and height must be in 1.." + std::to_string(kMaxImageSide) + ", got " + std::to_string(s.width) +
+                "x" + std::to_string(s.height));
   if (s.frames < 1 || s.frames > kMaxFrames)
     return fail("frames must be in 1.." + std::to_string(kMaxFrames) + ", got " + std::to_string(s.frames));
   if (!(s.fps > 0) || !std::isfinite(s.fps) || s.fps > 1e6) return fail("fps must be a number in (0, 1e6]");

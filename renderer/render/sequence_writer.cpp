@@ -216,9 +216,8 @@ Result<SequenceFile> RenderSequence(const RenderSettings& settings, const std::s
   std::error_code ec;
   fs::create_directories(out_dir, ec);
   if (ec || !fs::is_directory(out_dir))
-    return Result<SequenceFile>::Failure(out_dir + ": cannot create the output directory" +
-                                             (ec ? " (" + ec.message() + ")" : ""),
-                                         ErrorCode::kIo);
+    return Result<SequenceFile>::Failure(
+        out_dir + ": cannot create the output directory" + (ec ? " (" + ec.message() + ")" : ""), ErrorCode::kIo);
   const fs::path seq_path = fs::path(out_dir) / "sequence.json";
   SequenceFile seq = Describe(settings, **renderer);
   if (Status s = WriteSequenceFile(seq_path, seq); !s) return s.failure();

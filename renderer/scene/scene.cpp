@@ -4,9 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <numeric>
-#include <filesystem>
 #include <sstream>
 
 #include "shimmer/core/json_file.h"
@@ -194,9 +194,12 @@ bool ParseRgb(std::string_view text, glm::dvec3* out) {
     if (used != item.size() || !std::isfinite(x) || x < 0) return false;
     v.push_back(x);
   }
-  if (v.size() == 1) *out = glm::dvec3(v[0]);
-  else if (v.size() == 3) *out = {v[0], v[1], v[2]};
-  else return false;
+  if (v.size() == 1)
+    *out = glm::dvec3(v[0]);
+  else if (v.size() == 3)
+    *out = {v[0], v[1], v[2]};
+  else
+    return false;
   return true;
 }
 
@@ -221,8 +224,8 @@ Box Bounds(const Primitive& p) {
 
 struct BvhNode {
   Box box;
-  int skip = 0;    // the node after this subtree
-  int prim = -1;   // a leaf's one primitive; -1: interior
+  int skip = 0;   // the node after this subtree
+  int prim = -1;  // a leaf's one primitive; -1: interior
 };
 
 // Median split on the widest centroid axis, nodes appended in depth-first
@@ -324,8 +327,7 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
       r.Number("height", &p.radius, -kMaxCoordinate, kMaxCoordinate)
           .Number("bump_slope", &p.bump_slope, 0, 10)
           .Number("bump_frequency", &p.bump_frequency, 0, 1e4);
-      if (r.ok() && p.bump_slope > 0 && p.bump_frequency <= 0)
-        r.Fail("'bump_slope' needs a positive 'bump_frequency'");
+      if (r.ok() && p.bump_slope > 0 && p.bump_frequency <= 0) r.Fail("'bump_slope' needs a positive 'bump_frequency'");
     } else {
       return R::Failure(where + ": unknown type '" + type + "' (sphere, capsule, plane)");
     }
@@ -389,8 +391,7 @@ Result<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading
   auto colon = spec.find(':');
   if (colon == std::string_view::npos) return R::Failure("material '" + std::string(spec) + "'" + usage);
   auto ndf = shading::ParseNdf(spec.substr(0, colon));
-  if (!ndf)
-    return R::Failure("material '" + std::string(spec) + "': NDF must be ggx or beckmann" + usage);
+  if (!ndf) return R::Failure("material '" + std::string(spec) + "': NDF must be ggx or beckmann" + usage);
   m.ndf = *ndf;
   std::vector<double> alphas;
   std::stringstream ss{std::string(spec.substr(colon + 1))};
@@ -406,16 +407,17 @@ Result<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading
         used = 0;
       }
       if (used == 0 || used != item.size() || !std::isfinite(a) || a <= 0 || a > 1)
-        return R::Failure("material '" + std::string(spec) + "': roughness '" + item +
-                                           "' must be a number in (0, 1]");
-      if (alphas.size() == 2) return R::Failure("material '" + std::string(spec) + "': at most two roughness values" + usage);
+        return R::Failure("material '" + std::string(spec) + "': roughness '" + item + "' must be a number in (0, 1]");
+      if (alphas.size() == 2)
+        return R::Failure("material '" + std::string(spec) + "': at most two roughness values" + usage);
       alphas.push_back(a);
       continue;
     }
     std::string key = item.substr(0, eq), value = item.substr(eq + 1);
     glm::dvec3 rgb;
     if (!ParseRgb(value, &rgb))
-      return R::Failure("material '" + std::string(spec) + "': " + key + " expects V or R/G/B (>= 0), got '" + value + "'");
+      return R::Failure("material '" + std::string(spec) + "': " + key + " expects V or R/G/B (>= 0), got '" + value +
+                        "'");
     if (key == "f0") {
       if (glm::any(glm::greaterThan(rgb, glm::dvec3(1))))
         return R::Failure("material '" + std::string(spec) + "': f0 must be <= 1");
@@ -435,8 +437,10 @@ std::string MaterialSpec(const shading::MaterialDesc& m) {
   auto rgb = [](glm::dvec3 c) {
     std::ostringstream o;
     o.precision(6);
-    if (c.x == c.y && c.y == c.z) o << c.x;
-    else o << c.x << "/" << c.y << "/" << c.z;
+    if (c.x == c.y && c.y == c.z)
+      o << c.x;
+    else
+      o << c.x << "/" << c.y << "/" << c.z;
     return o.str();
   };
   std::ostringstream o;
@@ -460,8 +464,7 @@ int SceneFeatures(const Scene& scene) {
 
 std::vector<glm::vec4> PackScene(const Scene& scene) {
   std::vector<Primitive> bounded, unbounded;
-  for (const Primitive& p : scene.primitives)
-    (p.type == Primitive::Type::kPlane ? unbounded : bounded).push_back(p);
+  for (const Primitive& p : scene.primitives) (p.type == Primitive::Type::kPlane ? unbounded : bounded).push_back(p);
   std::vector<int> order(bounded.size());
   std::iota(order.begin(), order.end(), 0);
   std::vector<BvhNode> nodes;
@@ -536,36 +539,34 @@ glm::dvec3 Spherical(double distance, double elevation_deg, double azimuth_deg) 
 // distance per second, looking in a fixed direction. dolly: the distance
 // halves every 2 seconds (the footprint scale changes). vr-jitter: head-tracking
 // tremor, sums of sines of ~0.3% of the distance and ~0.2 degrees of rotation.
-shading::CameraDesc CameraAt(CameraPath path, const CameraRig& rig, int frame, double fps, int width,
-                             int height) {
+shading::CameraDesc CameraAt(CameraPath path, const CameraRig& rig, int frame, double fps, int width, int height) {
   const double t = frame / fps;
   glm::dvec3 pos = rig.target + Spherical(rig.distance, rig.elevation_deg, rig.azimuth_deg);
   switch (path) {
-  case CameraPath::kOrbit: {
-    pos = rig.target + Spherical(rig.distance, rig.elevation_deg, rig.azimuth_deg + 45.0 * t);
-    return LookAt(pos, rig.target, rig.fov_y_deg, width, height);
-  }
-  case CameraPath::kPan: {
-    shading::CameraDesc c0 = LookAt(pos, rig.target, rig.fov_y_deg, width, height);
-    glm::dvec3 shift = c0.right * (0.1 * rig.distance * t);
-    return LookAt(pos + shift, rig.target + shift, rig.fov_y_deg, width, height);
-  }
-  case CameraPath::kDolly: {
-    pos = rig.target + Spherical(rig.distance * std::exp2(-t / 2.0), rig.elevation_deg, rig.azimuth_deg);
-    return LookAt(pos, rig.target, rig.fov_y_deg, width, height);
-  }
-  case CameraPath::kVrJitter: {
-    const double a = 0.003 * rig.distance, w = 2 * kPi;
-    glm::dvec3 d{std::sin(w * 0.7 * t) + 0.5 * std::sin(w * 2.9 * t + 1.0),
-                 std::sin(w * 1.3 * t + 2.0) + 0.4 * std::sin(w * 3.7 * t),
-                 std::sin(w * 0.9 * t + 0.5)};
-    double yaw = 0.2 * std::sin(w * 0.5 * t + 0.3), pitch = 0.15 * std::sin(w * 1.1 * t + 1.2);
-    shading::CameraDesc c0 = LookAt(pos, rig.target, rig.fov_y_deg, width, height);
-    glm::dvec3 look = c0.fwd + c0.right * std::tan(yaw * kPi / 180) + c0.up * std::tan(pitch * kPi / 180);
-    glm::dvec3 p = pos + a * d;
-    return LookAt(p, p + look, rig.fov_y_deg, width, height);
-  }
-  case CameraPath::kStatic: break;
+    case CameraPath::kOrbit: {
+      pos = rig.target + Spherical(rig.distance, rig.elevation_deg, rig.azimuth_deg + 45.0 * t);
+      return LookAt(pos, rig.target, rig.fov_y_deg, width, height);
+    }
+    case CameraPath::kPan: {
+      shading::CameraDesc c0 = LookAt(pos, rig.target, rig.fov_y_deg, width, height);
+      glm::dvec3 shift = c0.right * (0.1 * rig.distance * t);
+      return LookAt(pos + shift, rig.target + shift, rig.fov_y_deg, width, height);
+    }
+    case CameraPath::kDolly: {
+      pos = rig.target + Spherical(rig.distance * std::exp2(-t / 2.0), rig.elevation_deg, rig.azimuth_deg);
+      return LookAt(pos, rig.target, rig.fov_y_deg, width, height);
+    }
+    case CameraPath::kVrJitter: {
+      const double a = 0.003 * rig.distance, w = 2 * kPi;
+      glm::dvec3 d{std::sin(w * 0.7 * t) + 0.5 * std::sin(w * 2.9 * t + 1.0),
+                   std::sin(w * 1.3 * t + 2.0) + 0.4 * std::sin(w * 3.7 * t), std::sin(w * 0.9 * t + 0.5)};
+      double yaw = 0.2 * std::sin(w * 0.5 * t + 0.3), pitch = 0.15 * std::sin(w * 1.1 * t + 1.2);
+      shading::CameraDesc c0 = LookAt(pos, rig.target, rig.fov_y_deg, width, height);
+      glm::dvec3 look = c0.fwd + c0.right * std::tan(yaw * kPi / 180) + c0.up * std::tan(pitch * kPi / 180);
+      glm::dvec3 p = pos + a * d;
+      return LookAt(p, p + look, rig.fov_y_deg, width, height);
+    }
+    case CameraPath::kStatic: break;
   }
   return LookAt(pos, rig.target, rig.fov_y_deg, width, height);
 }

@@ -52,9 +52,7 @@ struct Glsl<float> {
   }
   static float Density(int ndf, glm::vec2 s, glm::vec2 a) { return glsl_f32::slopeDensity(ndf, s, a); }
   static float RectSeed(glm::vec2 c, glm::vec2 a, glm::vec2 f) { return glsl_f32::ggxRectMeanSeed(c, a, f); }
-  static float RectStable(glm::vec2 c, glm::vec2 a, glm::vec2 f) {
-    return glsl_f32::ggxRectMeanStable(c, a, f);
-  }
+  static float RectStable(glm::vec2 c, glm::vec2 a, glm::vec2 f) { return glsl_f32::ggxRectMeanStable(c, a, f); }
 };
 template <>
 struct Glsl<double> {
@@ -64,12 +62,8 @@ struct Glsl<double> {
     return glsl_f64::evalVariant(v, ndf, a, f, p);
   }
   static double Density(int ndf, glm::dvec2 s, glm::dvec2 a) { return glsl_f64::slopeDensity(ndf, s, a); }
-  static double RectSeed(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) {
-    return glsl_f64::ggxRectMeanSeed(c, a, f);
-  }
-  static double RectStable(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) {
-    return glsl_f64::ggxRectMeanStable(c, a, f);
-  }
+  static double RectSeed(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) { return glsl_f64::ggxRectMeanSeed(c, a, f); }
+  static double RectStable(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) { return glsl_f64::ggxRectMeanStable(c, a, f); }
 };
 
 }  // namespace
@@ -108,11 +102,10 @@ T GgxRectMeanStable(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> 
   return Glsl<T>::RectStable(centre, alpha, half_sides);
 }
 
-#define SHIMMER_INSTANTIATE(T)                                                                        \
-  template FilteredNdf<T> EvaluateVariant<T>(int, Ndf, glm::vec<2, T>, const Footprint<T>&,           \
-                                             const Params<T>&);                                       \
-  template T SlopeDensity<T>(Ndf, glm::vec<2, T>, glm::vec<2, T>);                                    \
-  template T GgxRectMeanSeed<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                      \
+#define SHIMMER_INSTANTIATE(T)                                                                                 \
+  template FilteredNdf<T> EvaluateVariant<T>(int, Ndf, glm::vec<2, T>, const Footprint<T>&, const Params<T>&); \
+  template T SlopeDensity<T>(Ndf, glm::vec<2, T>, glm::vec<2, T>);                                             \
+  template T GgxRectMeanSeed<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                               \
   template T GgxRectMeanStable<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);
 SHIMMER_INSTANTIATE(float)
 SHIMMER_INSTANTIATE(double)
@@ -136,8 +129,8 @@ Camera GlslCamera(const CameraDesc& camera) {
 }
 }  // namespace
 
-PixelTraceCheck TracePixelBothWays(std::span<const glm::vec4> scene_words, int scene_features,
-                                   const CameraDesc& camera, glm::ivec2 px, glm::dvec2 offset) {
+PixelTraceCheck TracePixelBothWays(std::span<const glm::vec4> scene_words, int scene_features, const CameraDesc& camera,
+                                   glm::ivec2 px, glm::dvec2 offset) {
   using namespace glsl_f32;
   g_scene_words = scene_words;
   g_scene_features = scene_features;

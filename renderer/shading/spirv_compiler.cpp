@@ -63,7 +63,8 @@ Result<Spirv> CompileCompute(const GlslFile& main, std::span<const GlslFile> ext
   options.disableOptimizer = false;
   Spirv words;
   glslang::GlslangToSpv(*program.getIntermediate(EShLangCompute), words, &options);
-  if (words.empty()) return Result<Spirv>::Failure(main.name + ": SPIR-V generation produced no code", ErrorCode::kInternal);
+  if (words.empty())
+    return Result<Spirv>::Failure(main.name + ": SPIR-V generation produced no code", ErrorCode::kInternal);
   return words;
 }
 

@@ -30,8 +30,7 @@ Result<VariantName> ParseVariantName(std::string_view name) {
     const std::string_view digits = name.substr(kSupersample.size());
     int n = 0;
     auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), n);
-    if (digits.empty() || ec != std::errc() || end != digits.data() + digits.size() || n < 1 ||
-        n > kMaxSupersampleN)
+    if (digits.empty() || ec != std::errc() || end != digits.data() + digits.size() || n < 1 || n > kMaxSupersampleN)
       return Result<VariantName>::Failure("variant '" + std::string(name) + "': supersample-N needs N in 1.." +
                                           std::to_string(kMaxSupersampleN));
     v.kind = VariantName::Kind::kSupersample;

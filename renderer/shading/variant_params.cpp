@@ -52,8 +52,8 @@ Status ValidateParam(std::string_view name, double value) {
     return Status::Failure("unknown parameter '" + std::string(name) + "' (the parameters are " + list + ")");
   }
   if (!std::isfinite(value) || value < f->lo || value > f->hi)
-    return Status::Failure("parameter " + std::string(name) + " must be >= " + Number(f->lo) + " and <= " +
-                           Number(f->hi) + ", got " + Number(value));
+    return Status::Failure("parameter " + std::string(name) + " must be >= " + Number(f->lo) +
+                           " and <= " + Number(f->hi) + ", got " + Number(value));
   return Ok();
 }
 
@@ -67,8 +67,8 @@ Result<Params<double>> ResolveParams(const VariantInfo& info,
     if (!known) {
       std::string list;
       for (const ParamInfo& p : info.params) list += (list.empty() ? "" : ", ") + std::string(p.name);
-      return Result<Params<double>>::Failure("variant " + std::string(info.name) + " has no parameter '" + name +
-                                             "'" + (list.empty() ? " (it takes none)" : " (it takes: " + list + ")"));
+      return Result<Params<double>>::Failure("variant " + std::string(info.name) + " has no parameter '" + name + "'" +
+                                             (list.empty() ? " (it takes none)" : " (it takes: " + list + ")"));
     }
     if (Status s = ValidateParam(name, value); !s) return s.failure();
     values.*(FindParamField(name)->member) = value;

@@ -155,7 +155,7 @@ Instance CreateInstance(ValidationLog* log) {
   if (out.validation) {
     layers.push_back("VK_LAYER_KHRONOS_validation");
     extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);  // provided by the layer
-    ci.pNext = &messenger;  // also reports on vkCreateInstance/vkDestroyInstance
+    ci.pNext = &messenger;                                    // also reports on vkCreateInstance/vkDestroyInstance
   }
   ci.pApplicationInfo = &app;
   ci.enabledLayerCount = static_cast<std::uint32_t>(layers.size());
@@ -287,8 +287,9 @@ Result<std::unique_ptr<Context>> Context::Create(const ContextOptions& options) 
   }
   std::vector<VkPhysicalDevice> devices = UsableDevices(c.instance);
   if (devices.empty())
-    return R::Failure("no Vulkan 1.2 device with a compute queue was found (install Mesa lavapipe: mesa-vulkan-drivers)",
-                      ErrorCode::kInternal);
+    return R::Failure(
+        "no Vulkan 1.2 device with a compute queue was found (install Mesa lavapipe: mesa-vulkan-drivers)",
+        ErrorCode::kInternal);
   std::vector<VkPhysicalDevice> candidates;
   std::string names;
   for (VkPhysicalDevice pd : devices) {

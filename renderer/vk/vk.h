@@ -18,7 +18,7 @@ namespace shimmer::vk {
 struct DeviceInfo {
   std::string name;
   std::string driver;  // driver name and version text, e.g. "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)"
-  std::string type;  // "discrete", "integrated", "virtual", "cpu", "other"
+  std::string type;    // "discrete", "integrated", "virtual", "cpu", "other"
   std::uint32_t api_version = 0;
   std::uint32_t subgroup_size = 0;
   bool quad_ops_in_compute = false;
@@ -105,8 +105,8 @@ class Context {
   // workgroups; returns its GPU milliseconds, from timestamps around the
   // dispatch (wall time when the queue has none). Thread-safe: dispatches
   // from several threads run one at a time.
-  Result<double> Dispatch(ComputePipeline& pipeline, std::span<Buffer* const> buffers,
-                          std::span<const std::byte> push, std::uint32_t groups_x, std::uint32_t groups_y);
+  Result<double> Dispatch(ComputePipeline& pipeline, std::span<Buffer* const> buffers, std::span<const std::byte> push,
+                          std::uint32_t groups_x, std::uint32_t groups_y);
 
  private:
   Context() = default;

@@ -533,7 +533,6 @@ std::vector<Case> GpuCases() {
   };
 }
 
-
 void RunCase(const Case& c) {
   if (c.needs_permissions && ::geteuid() == 0) GTEST_SKIP() << "running as root: permission bits do not stop writes";
   if (c.needs_less_memory && shimmer::AvailableHostMemory() >= c.needs_less_memory)

@@ -62,14 +62,14 @@ TEST(SequenceFile, WrongTypesNameTheKey) {
     const char* json;
     const char* expect;
   };
-  for (const Case& c : {Case{R"({"fps": "fast"})", "s.json: \"fps\" must be a finite number"},
-                        Case{R"({"fps": -1})", "s.json: \"fps\" must be > 0"},
-                        Case{R"({"status": "done"})", "\"status\" must be \"running\", \"complete\" or \"failed\""},
-                        Case{R"({"frames": [{"gpu_ms": 1}]})", "\"frames\" must be an array of file names"},
-                        Case{R"({"frames": [{"file": "a.exr", "gpu_ms": "x"}]})", "frames[0]: \"gpu_ms\""},
-                        Case{R"({"camera": {"target": [1, 2]}})", "camera: \"target\" must be [x, y, z]"},
-                        Case{R"({"width": 1.5})", "\"width\" must be an integer"},
-                        Case{R"([1, 2])", "expected a JSON object"}}) {
+  for (const Case& c :
+       {Case{R"({"fps": "fast"})", "s.json: \"fps\" must be a finite number"},
+        Case{R"({"fps": -1})", "s.json: \"fps\" must be > 0"},
+        Case{R"({"status": "done"})", "\"status\" must be \"running\", \"complete\" or \"failed\""},
+        Case{R"({"frames": [{"gpu_ms": 1}]})", "\"frames\" must be an array of file names"},
+        Case{R"({"frames": [{"file": "a.exr", "gpu_ms": "x"}]})", "frames[0]: \"gpu_ms\""},
+        Case{R"({"camera": {"target": [1, 2]}})", "camera: \"target\" must be [x, y, z]"},
+        Case{R"({"width": 1.5})", "\"width\" must be an integer"}, Case{R"([1, 2])", "expected a JSON object"}}) {
     auto s = SequenceFromJson(nlohmann::json::parse(c.json), "s.json");
     ASSERT_FALSE(s) << c.json;
     EXPECT_NE(s.error().find(c.expect), std::string::npos) << s.error();

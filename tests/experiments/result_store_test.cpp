@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <set>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "shimmer/experiments/job.h"
 #include "shimmer/experiments/result_store.h"
@@ -16,7 +16,9 @@ namespace {
 namespace fs = std::filesystem;
 
 struct TempDir {
-  fs::path path = fs::temp_directory_path() / ("shimmer-store-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  fs::path path = fs::temp_directory_path() /
+                  ("shimmer-store-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" +
+                   ::testing::UnitTest::GetInstance()->current_test_info()->name());
   TempDir() { fs::remove_all(path), fs::create_directories(path); }
   ~TempDir() { fs::remove_all(path); }
 };
@@ -191,9 +193,12 @@ std::vector<std::vector<std::string>> ParseCsv(const std::string& text) {
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
     if (quoted) {
-      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') field += '"', ++i;
-      else if (c == '"') quoted = false;
-      else field += c;
+      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"')
+        field += '"', ++i;
+      else if (c == '"')
+        quoted = false;
+      else
+        field += c;
     } else if (c == '"' && !field_started) {
       quoted = field_started = true;
     } else if (c == ',') {
@@ -213,10 +218,9 @@ std::vector<std::vector<std::string>> ParseCsv(const std::string& text) {
 
 TEST(Csv, FieldsWithCommasQuotesAndNewlinesReadBackAsWritten) {
   const std::vector<std::string> header = {"name", "params", "note"};
-  const std::vector<std::vector<std::string>> rows = {
-      {"tk19", "{\"kappa\":0.18,\"sigma2\":0.25}", "plain"},
-      {"a,b", "say \"hi\"", "two\nlines"},
-      {"", "trailing space ", "\"\""}};
+  const std::vector<std::vector<std::string>> rows = {{"tk19", "{\"kappa\":0.18,\"sigma2\":0.25}", "plain"},
+                                                      {"a,b", "say \"hi\"", "two\nlines"},
+                                                      {"", "trailing space ", "\"\""}};
   CsvTable table(header);
   for (const auto& r : rows) table.AddRow(r);
   const auto read = ParseCsv(table.Text());
@@ -250,10 +254,10 @@ TEST(Report, WritesTablesCsvAndPlotScripts) {
   std::ifstream csv_in(dir.path / "rep" / "report.csv", std::ios::binary);
   const auto csv = ParseCsv(std::string((std::istreambuf_iterator<char>(csv_in)), {}));
   ASSERT_EQ(csv.size(), 4u);
-  const std::vector<std::string> header = {"scene",  "material",     "camera",      "variant",       "params",
-                                           "derivatives", "region", "tv_ratio",   "tv_err",        "energy_bias",
-                                           "temporal_diff_err", "relmse", "flicker_index", "ms_per_frame", "device",
-                                           "driver"};
+  const std::vector<std::string> header = {
+      "scene",    "material", "camera",      "variant",           "params", "derivatives",   "region",
+      "tv_ratio", "tv_err",   "energy_bias", "temporal_diff_err", "relmse", "flicker_index", "ms_per_frame",
+      "device",   "driver"};
   EXPECT_EQ(csv[0], header);
   const std::vector<std::string>* tk19 = nullptr;
   for (const auto& record : csv) {

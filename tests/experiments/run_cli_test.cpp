@@ -110,8 +110,13 @@ TEST(RunCli, ShardsMergedEqualOneRun) {
   Workspace ws;
   ASSERT_EQ(std::system(ws.Run("--db full.db --work full --jobs 2").c_str()), 0);
   for (int i = 0; i < 3; ++i)
-    ASSERT_EQ(std::system(ws.Run("--shard " + std::to_string(i) + "/3 --db s" + std::to_string(i) + ".db --work s").c_str()), 0);
-  ASSERT_EQ(std::system(("cd " + ws.dir.string() + " && " + SHIMMER_EXE + " merge s0.db s1.db s2.db -o all.db >>log.txt 2>&1").c_str()), 0);
+    ASSERT_EQ(
+        std::system(ws.Run("--shard " + std::to_string(i) + "/3 --db s" + std::to_string(i) + ".db --work s").c_str()),
+        0);
+  ASSERT_EQ(
+      std::system(("cd " + ws.dir.string() + " && " + SHIMMER_EXE + " merge s0.db s1.db s2.db -o all.db >>log.txt 2>&1")
+                      .c_str()),
+      0);
   const auto full = Rows(ws.dir / "full.db");
   const auto merged = Rows(ws.dir / "all.db");
   ASSERT_EQ(merged.size(), full.size());
@@ -124,8 +129,9 @@ TEST(RunCli, ShardsMergedEqualOneRun) {
 
 TEST(RunCli, MalformedSpecIsRejectedBeforeAnyWork) {
   Workspace ws;
-  std::ofstream(ws.dir / "bad.json") << "{\n \"name\": \"b\",\n \"scenes\": [\"sphere\"],\n \"materials\": [\"ggx:0.1\"],\n"
-                                        " \"cameras\": [\"orbit\"],\n \"variants\": [\"nope\"]\n}\n";
+  std::ofstream(ws.dir / "bad.json")
+      << "{\n \"name\": \"b\",\n \"scenes\": [\"sphere\"],\n \"materials\": [\"ggx:0.1\"],\n"
+         " \"cameras\": [\"orbit\"],\n \"variants\": [\"nope\"]\n}\n";
   const int rc = std::system(("cd " + ws.dir.string() + " && " + SHIMMER_EXE + " run bad.json >out.txt 2>&1").c_str());
   EXPECT_EQ(WEXITSTATUS(rc), 2);
   std::ifstream out(ws.dir / "out.txt");

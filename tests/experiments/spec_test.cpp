@@ -86,7 +86,8 @@ TEST(Spec, ReferencesAreShared) {
   std::set<std::string> refs;
   for (const Job& j : jobs) refs.insert(ReferenceId(j));
   EXPECT_EQ(refs.size(), 2u * 2 * 1);
-  const Job& rect = *std::find_if(jobs.begin(), jobs.end(), [](const Job& j) { return j.variant == "k16-beckmann-rect"; });
+  const Job& rect =
+      *std::find_if(jobs.begin(), jobs.end(), [](const Job& j) { return j.variant == "k16-beckmann-rect"; });
   Job changed = rect;
   changed.params["fp_max"] = 0.5;
   EXPECT_NE(JobId(changed), JobId(rect));
@@ -114,8 +115,9 @@ TEST(Spec, ShardsPartitionTheJobs) {
 std::string ErrorOf(std::string text) { return ParseSpec(text, "bad.json").error(); }
 
 TEST(Spec, MalformedSpecsNameTheKeyAndLine) {
-  const std::string base_head = "{\n  \"name\": \"b\",\n  \"scenes\": [\"sphere\"],\n  \"materials\": [\"ggx:0.1\"],\n"
-                                "  \"cameras\": [\"orbit\"],\n";
+  const std::string base_head =
+      "{\n  \"name\": \"b\",\n  \"scenes\": [\"sphere\"],\n  \"materials\": [\"ggx:0.1\"],\n"
+      "  \"cameras\": [\"orbit\"],\n";
   std::string e = ErrorOf(base_head + "  \"variants\": [\"none\"],\n  \"frmes\": 8\n}");
   EXPECT_NE(e.find("bad.json:7"), std::string::npos) << e;
   EXPECT_NE(e.find("frmes: unknown key"), std::string::npos) << e;
@@ -130,30 +132,35 @@ TEST(Spec, MalformedSpecsNameTheKeyAndLine) {
   e = ErrorOf(base_head + "  \"variants\": [\"none\"],\n  \"frames\": \"eight\"\n}");
   EXPECT_NE(e.find("frames: must be an integer in 1..4096, found \"eight\""), std::string::npos) << e;
 
-  e = ErrorOf("{\n  \"name\": \"b\",\n  \"scenes\": [],\n  \"materials\": [\"ggx:0.1\"],\n  \"cameras\": [\"orbit\"],\n"
-              "  \"variants\": [\"none\"]\n}");
+  e = ErrorOf(
+      "{\n  \"name\": \"b\",\n  \"scenes\": [],\n  \"materials\": [\"ggx:0.1\"],\n  \"cameras\": [\"orbit\"],\n"
+      "  \"variants\": [\"none\"]\n}");
   EXPECT_NE(e.find("bad.json:3: scenes: is empty"), std::string::npos) << e;
 
   e = ErrorOf(base_head + "  \"variants\": [\"none\"],\n  \"size\": [64, 64\n}");
   EXPECT_NE(e.find("bad.json:8:1: not valid JSON"), std::string::npos) << e;
 
-  e = ErrorOf(base_head + "  \"variants\": [{\"name\": \"tk19\", \"params\": {\"kappa\": {\"from\": 0, \"to\": 1, "
-                          "\"steps\": 3, \"scale\": \"log\"}}}]\n}");
+  e = ErrorOf(base_head +
+              "  \"variants\": [{\"name\": \"tk19\", \"params\": {\"kappa\": {\"from\": 0, \"to\": 1, "
+              "\"steps\": 3, \"scale\": \"log\"}}}]\n}");
   EXPECT_NE(e.find("log range needs from > 0"), std::string::npos) << e;
 
   e = ErrorOf(base_head + "  \"variants\": [\"none\"],\n  \"derivatives\": [\"sobel\"]\n}");
   EXPECT_NE(e.find("derivatives: must be quad"), std::string::npos) << e;
 
-  e = ErrorOf("{\"name\": \"b\", \"scenes\": [\"nowhere.json\"], \"materials\": [\"ggx:0.1\"], "
-              "\"cameras\": [\"orbit\"], \"variants\": [\"none\"]}");
+  e = ErrorOf(
+      "{\"name\": \"b\", \"scenes\": [\"nowhere.json\"], \"materials\": [\"ggx:0.1\"], "
+      "\"cameras\": [\"orbit\"], \"variants\": [\"none\"]}");
   EXPECT_NE(e.find("nowhere.json"), std::string::npos) << e;
 
-  e = ErrorOf("{\"name\": \"b\", \"scenes\": [\"sphere\"], \"materials\": [\"ggx:-1\"], "
-              "\"cameras\": [\"orbit\"], \"variants\": [\"none\"]}");
+  e = ErrorOf(
+      "{\"name\": \"b\", \"scenes\": [\"sphere\"], \"materials\": [\"ggx:-1\"], "
+      "\"cameras\": [\"orbit\"], \"variants\": [\"none\"]}");
   EXPECT_NE(e.find("ggx:-1"), std::string::npos) << e;
 
-  e = ErrorOf("{\"name\": \"b\", \"scenes\": [\"sphere\"], \"materials\": [\"ggx:0.1\"], "
-              "\"cameras\": [\"spin\"], \"variants\": [\"none\"]}");
+  e = ErrorOf(
+      "{\"name\": \"b\", \"scenes\": [\"sphere\"], \"materials\": [\"ggx:0.1\"], "
+      "\"cameras\": [\"spin\"], \"variants\": [\"none\"]}");
   EXPECT_NE(e.find("spin: unknown camera path"), std::string::npos) << e;
 }
 
@@ -166,10 +173,12 @@ const std::string kShots = R"("train": {"scenes": ["sphere"], "cameras": ["orbit
 
 TEST(Spec, FitSectionParses) {
   auto r = ParseSpec(FitSpec(R"(["ggx:0.02", "beckmann:0.1"])",
-                                   R"([{"variants": ["k16-beckmann-rect"], "param": "fp_max", "bounds": [0.05, 2],
-  "sweep_points": 5, "weights": {"bias": 4}, )" + kShots + R"(},
-  {"variants": ["tk19"], "param": "kappa", )" + kShots + "}]"),
-                           "f.json");
+                             R"([{"variants": ["k16-beckmann-rect"], "param": "fp_max", "bounds": [0.05, 2],
+  "sweep_points": 5, "weights": {"bias": 4}, )" +
+                                 kShots + R"(},
+  {"variants": ["tk19"], "param": "kappa", )" +
+                                 kShots + "}]"),
+                     "f.json");
   ASSERT_TRUE(r.ok()) << r.error();
   ASSERT_EQ(r->fits.size(), 2u);
   const FitConfig& c = r->fits[0];
@@ -189,13 +198,13 @@ TEST(Spec, BadFitConfigurationsAreRejectedUpFront) {
     return ParseSpec(FitSpec(materials, fit), "f.json").error();
   };
   const std::string ggx = R"(["ggx:0.02"])";
-  std::string e = error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "bounds": [2, 2], )" + kShots + "}");
+  std::string e =
+      error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "bounds": [2, 2], )" + kShots + "}");
   EXPECT_NE(e.find("bounds: are empty"), std::string::npos) << e;
   e = error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "bounds": [0, 1], )" + kShots + "}");
   EXPECT_NE(e.find("bounds: are empty or not positive"), std::string::npos) << e;
   e = error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_mux", )" + kShots + "}");
-  EXPECT_NE(e.find("k16-beckmann-rect: has no parameter \"fp_mux\" to fit (its parameters: fp_max)"),
-            std::string::npos)
+  EXPECT_NE(e.find("k16-beckmann-rect: has no parameter \"fp_mux\" to fit (its parameters: fp_max)"), std::string::npos)
       << e;
   e = error(ggx, R"({"variants": ["tk19"], "param": "fp_max", )" + kShots + "}");
   EXPECT_NE(e.find("tk19: has no parameter \"fp_max\""), std::string::npos) << e;
@@ -203,11 +212,18 @@ TEST(Spec, BadFitConfigurationsAreRejectedUpFront) {
   EXPECT_NE(e.find("(its parameters: none)"), std::string::npos) << e;
   e = error(R"(["beckmann:0.1"])", R"({"variants": ["k16-ggx-rect-stable"], "param": "fp_max", )" + kShots + "}");
   EXPECT_NE(e.find("takes GGX materials only"), std::string::npos) << e;
-  e = error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "train": {"scenes": ["sphere"], "cameras": ["orbit"]}})");
+  e = error(
+      ggx,
+      R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "train": {"scenes": ["sphere"], "cameras": ["orbit"]}})");
   EXPECT_NE(e.find("needs \"validate\""), std::string::npos) << e;
-  e = error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "weights": {"flicker": 0, "spatial": 0, "bias": 0}, )" + kShots + "}");
+  e = error(
+      ggx,
+      R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "weights": {"flicker": 0, "spatial": 0, "bias": 0}, )" +
+          kShots + "}");
   EXPECT_NE(e.find("weights: must be non-negative and not all zero"), std::string::npos) << e;
-  e = error(ggx, R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "validate": {"scenes": ["sphere"], "cameras": ["spin"]}, "train": {"scenes": ["sphere"], "cameras": ["orbit"]}})");
+  e = error(
+      ggx,
+      R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "validate": {"scenes": ["sphere"], "cameras": ["spin"]}, "train": {"scenes": ["sphere"], "cameras": ["orbit"]}})");
   EXPECT_NE(e.find("spin: unknown camera path"), std::string::npos) << e;
 }
 

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <Imath/half.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -9,7 +10,6 @@
 #include <ImfOutputPart.h>
 #include <ImfPartType.h>
 #include <ImfTiledOutputFile.h>
-#include <Imath/half.h>
 
 #include <fstream>
 
@@ -19,10 +19,10 @@
 namespace shimmer::metrics {
 namespace {
 
-using testing::WriteExrMats;
 using testing::Layout;
 using testing::SequenceSpec;
 using testing::TempDir;
+using testing::WriteExrMats;
 using testing::WriteSequence;
 
 SequenceSpec Ramp(Layout layout, int frames = 3) {
@@ -155,8 +155,8 @@ void WriteLayoutProbe(const std::filesystem::path& file, Storage storage, Imf::C
   std::vector<std::vector<Imath::half>> halves;
   Imf::FrameBuffer buffer;
   const std::vector<std::pair<std::string, bool>> channels = {
-      {"R", true}, {"G", true}, {"B", true}, {"specular.R", false}, {"specular.G", false}, {"specular.B", false},
-      {"Z", false}};
+      {"R", true},           {"G", true},           {"B", true}, {"specular.R", false},
+      {"specular.G", false}, {"specular.B", false}, {"Z", false}};
   for (size_t c = 0; c < channels.size(); ++c) {
     const auto& [name, half] = channels[c];
     header.channels().insert(name, Imf::Channel(half ? Imf::HALF : Imf::FLOAT));
@@ -171,8 +171,8 @@ void WriteLayoutProbe(const std::filesystem::path& file, Storage storage, Imf::C
                                      w * sizeof(Imath::half)));
     } else {
       auto& v = floats.emplace_back(std::move(values));
-      buffer.insert(name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(v.data() - shift), sizeof(float),
-                                     w * sizeof(float)));
+      buffer.insert(
+          name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(v.data() - shift), sizeof(float), w * sizeof(float)));
     }
   }
   if (storage == Storage::kScanlines) {
@@ -211,9 +211,9 @@ cv::Mat LuminanceByImf(const std::filesystem::path& file, const std::string& pre
 
 TEST(ExrSequence, ReadsEveryStorageAndCompressionAsOpenExrDoes) {
   TempDir dir;
-  const Imf::Compression compressions[] = {Imf::NO_COMPRESSION, Imf::RLE_COMPRESSION,   Imf::ZIPS_COMPRESSION,
-                                           Imf::ZIP_COMPRESSION, Imf::PIZ_COMPRESSION,   Imf::PXR24_COMPRESSION,
-                                           Imf::B44_COMPRESSION, Imf::B44A_COMPRESSION,  Imf::DWAA_COMPRESSION,
+  const Imf::Compression compressions[] = {Imf::NO_COMPRESSION,  Imf::RLE_COMPRESSION,  Imf::ZIPS_COMPRESSION,
+                                           Imf::ZIP_COMPRESSION, Imf::PIZ_COMPRESSION,  Imf::PXR24_COMPRESSION,
+                                           Imf::B44_COMPRESSION, Imf::B44A_COMPRESSION, Imf::DWAA_COMPRESSION,
                                            Imf::DWAB_COMPRESSION};
   for (Storage storage : {Storage::kScanlines, Storage::kTiles, Storage::kMipmappedTiles})
     for (Imf::Compression compression : compressions) {
@@ -323,7 +323,8 @@ TEST(ExrSequenceErrors, MissingChannelInALaterFrame) {
   TempDir dir;
   WriteSequence(dir.path(), Ramp(Layout::kSpecularLayer, 2));
   cv::Mat v(6, 8, CV_32F, cv::Scalar(1));
-  ASSERT_TRUE(WriteExrMats(dir / "frame_0002.exr", {{"R", v}, {"G", v}, {"B", v}, {"specular.R", v}, {"specular.B", v}}));
+  ASSERT_TRUE(
+      WriteExrMats(dir / "frame_0002.exr", {{"R", v}, {"G", v}, {"B", v}, {"specular.R", v}, {"specular.B", v}}));
   auto seq = OpenSequence(dir.path(), {});
   ASSERT_FALSE(seq);
   EXPECT_TRUE(Contains(seq.error(), "frame_0002.exr")) << seq.error();
@@ -348,7 +349,8 @@ TEST(ExrSequenceErrors, TruncatedFileFailsOnRead) {
   const auto file = dir / "frame_0000.exr";
   std::filesystem::resize_file(file, std::filesystem::file_size(file) * 2 / 3);
   auto seq = OpenSequence(dir.path(), {});  // the header alone is intact
-  Result<LuminanceFrame> frame = seq ? ReadFrame(file, "beauty", 64, 64, false) : Result<LuminanceFrame>::Failure(seq.error());
+  Result<LuminanceFrame> frame =
+      seq ? ReadFrame(file, "beauty", 64, 64, false) : Result<LuminanceFrame>::Failure(seq.error());
   ASSERT_FALSE(frame);
   EXPECT_TRUE(Contains(frame.error(), "frame_0000.exr")) << frame.error();
 }

@@ -30,10 +30,10 @@ TEST(PeriodicHann, IsScipysPeriodicWindow) {
 
 TEST(WelchSegments, CountsLikeScipy) {
   EXPECT_EQ(WelchSegmentCount(64, 64), 1);
-  EXPECT_EQ(WelchSegmentCount(95, 64), 1);   // tail shorter than a step is dropped
+  EXPECT_EQ(WelchSegmentCount(95, 64), 1);  // tail shorter than a step is dropped
   EXPECT_EQ(WelchSegmentCount(96, 64), 2);
   EXPECT_EQ(WelchSegmentCount(40, 16), 4);
-  EXPECT_EQ(WelchSegmentCount(37, 15), 3);   // odd L: step = L - L/2 = 8
+  EXPECT_EQ(WelchSegmentCount(37, 15), 3);  // odd L: step = L - L/2 = 8
   EXPECT_EQ(WelchSegmentCount(10, 16), 0);
 }
 
@@ -143,14 +143,14 @@ TEST(FlickerSpectrum, ExcludedPixelsDoNotContribute) {
 TEST(FlickerSpectrum, MatchesScipyWelch) {
   std::vector<double> x(40);
   for (int n = 0; n < 40; ++n) x[n] = std::sin(0.7 * n) + 0.3 * std::cos(2.1 * n + 0.4) + 0.01 * n * n;
-  const std::vector<double> even = {0.0070738958447897236, 0.45999093006842029,  0.16796071297263221,
-                                    0.025335232334966228,  0.0016799744188049409, 0.013379048519049511,
+  const std::vector<double> even = {0.0070738958447897236, 0.45999093006842029,    0.16796071297263221,
+                                    0.025335232334966228,  0.0016799744188049409,  0.013379048519049511,
                                     0.009275945640623064,  0.00014704923261399486, 3.7185815756954353e-06};
   auto psd = WelchPsd(x, 30, 16);
   ASSERT_EQ(psd.size(), even.size());
   for (size_t k = 0; k < psd.size(); ++k) EXPECT_NEAR(psd[k], even[k], 2e-6 * 0.46) << "bin " << k;
 
-  const std::vector<double> odd = {0.016586359658972916,  0.35090398037176196,  0.18870983237355751,
+  const std::vector<double> odd = {0.016586359658972916,  0.35090398037176196,   0.18870983237355751,
                                    0.017200319607323558,  0.0047461047299994672, 0.018866734248224683,
                                    0.0048717703540978796, 1.3797855249009213e-06};
   psd = WelchPsd(std::vector<double>(x.begin(), x.begin() + 37), 24, 15);
@@ -175,7 +175,7 @@ TEST(WatsonTemporalGain, BandPassPeakingNearEightHertz) {
   EXPECT_NEAR(best, 1.0, 1e-4);  // a 0.1 Hz grid straddles the exact peak
   EXPECT_GT(best_f, 7.0);
   EXPECT_LT(best_f, 10.0);
-  EXPECT_LT(WatsonTemporalGain(0.0), 0.2);   // sustained light is not flicker
+  EXPECT_LT(WatsonTemporalGain(0.0), 0.2);    // sustained light is not flicker
   EXPECT_LT(WatsonTemporalGain(60.0), 0.01);  // beyond fusion
   EXPECT_GT(WatsonTemporalGain(2.0), WatsonTemporalGain(0.5));
   EXPECT_GT(WatsonTemporalGain(15.0), WatsonTemporalGain(30.0));

@@ -142,9 +142,9 @@ TEST(MetricsCli, VideoIsWrittenOrClearlyRefused) {
   TempDir dir;
   WriteSequence(dir / "test", Flicker(6));
   WriteSequence(dir / "ref", Steady(6));
-  Outcome o = RunShimmer((dir / "test").string() + " " + (dir / "ref").string() + " --video " +
-                             (dir / "flicker.mp4").string(),
-                         dir.path());
+  Outcome o =
+      RunShimmer((dir / "test").string() + " " + (dir / "ref").string() + " --video " + (dir / "flicker.mp4").string(),
+                 dir.path());
   if (o.exit_code == 0) {
     ASSERT_TRUE(std::filesystem::exists(dir / "flicker.mp4"));
     EXPECT_GT(std::filesystem::file_size(dir / "flicker.mp4"), 0u);

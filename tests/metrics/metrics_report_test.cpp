@@ -12,10 +12,10 @@
 namespace shimmer::metrics {
 namespace {
 
-using testing::WriteExrMats;
 using testing::Layout;
 using testing::SequenceSpec;
 using testing::TempDir;
+using testing::WriteExrMats;
 using testing::WriteSequence;
 
 constexpr double kPi = std::numbers::pi;
@@ -66,8 +66,8 @@ TEST(MetricsReport, PixelSinusoidHasKnownVarianceAndSpectralPeak) {
                   return static_cast<float>(2.0 + amplitude * std::sin(2 * kPi * f0 * t / fs + 0.1 * (x + y)));
                 }));
   WriteSequence(dir / "ref", Spec(frames, [](int, int, int) { return 2.0f; }));
-  MetricsReport r = Measure({.test = dir / "test", .reference = dir / "ref", .request = {.fps = fs},
-                         .segment_length = length});
+  MetricsReport r =
+      Measure({.test = dir / "test", .reference = dir / "ref", .request = {.fps = fs}, .segment_length = length});
   const double variance = amplitude * amplitude / 2 * frames / (frames - 1.0);
   EXPECT_NEAR(r.tv_test, variance, 1e-6 * variance);
   EXPECT_NEAR(*r.tv_err, variance, 1e-6 * variance);
@@ -110,7 +110,8 @@ TEST(MetricsReport, WhiteNoiseHasFlatSpectrumAtItsVariance) {
   std::vector<float> values(static_cast<size_t>(frames) * 48 * 48);
   for (float& v : values) v = 1.0f + noise(rng);
   TempDir dir;
-  WriteSequence(dir / "test", Spec(frames, [&](int t, int x, int y) { return values[(t * 48 + y) * 48 + x]; }, 48));
+  WriteSequence(dir / "test", Spec(
+                                  frames, [&](int t, int x, int y) { return values[(t * 48 + y) * 48 + x]; }, 48));
   MetricsReport r = Measure({.test = dir / "test", .request = {.fps = fs}, .segment_length = length});
   EXPECT_FALSE(r.tv_ref);  // reference-relative keys absent without REF
   EXPECT_EQ(r.flicker.signal, "test");
@@ -168,7 +169,9 @@ TEST(MetricsReport, NonFinitePixelsAreExcludedAndCounted) {
                   if (x == 7 && y == 1 && t == 0) return inf;
                   return static_cast<float>(1.0 + 0.1 * (t % 2));
                 }));
-  WriteSequence(dir / "ref", Spec(8, [](int, int x, int y) { return x == 9 && y == 9 ? -std::numeric_limits<float>::infinity() : 1.0f; }));
+  WriteSequence(dir / "ref", Spec(8, [](int, int x, int y) {
+                  return x == 9 && y == 9 ? -std::numeric_limits<float>::infinity() : 1.0f;
+                }));
   MetricsReport r = Measure({.test = dir / "test", .reference = dir / "ref"});
   EXPECT_EQ(r.nan_pixels, 3);
   EXPECT_EQ(r.nan_samples, 1 + 1 + 8);
@@ -193,7 +196,9 @@ TEST(MetricsReport, HighlightMaskRestrictsTheRegion) {
   SequenceSpec rs = Spec(4, ref);
   rs.layout = Layout::kSpecularLayer;
   WriteSequence(dir / "ref", rs);
-  SequenceSpec ts = Spec(4, [](int t, int x, int y) { return (x < 16 ? 0.2f : 0.2f + 0.1f * (t % 2)) + (x == 10 && y == 10 ? 4.8f : 0.0f); });
+  SequenceSpec ts = Spec(4, [](int t, int x, int y) {
+    return (x < 16 ? 0.2f : 0.2f + 0.1f * (t % 2)) + (x == 10 && y == 10 ? 4.8f : 0.0f);
+  });
   ts.layout = Layout::kSpecularLayer;
   WriteSequence(dir / "test", ts);
   MetricsOptions o{.test = dir / "test", .reference = dir / "ref", .highlight_mask = true};
@@ -201,7 +206,7 @@ TEST(MetricsReport, HighlightMaskRestrictsTheRegion) {
   MetricsReport r = Measure(o);
   EXPECT_EQ(r.layer, "specular");
   EXPECT_EQ(r.region, "highlight");
-  EXPECT_EQ(r.pixels, 5);  // OpenCV's 3x3 ellipse is a plus: the spot and its 4 neighbours
+  EXPECT_EQ(r.pixels, 5);     // OpenCV's 3x3 ellipse is a plus: the spot and its 4 neighbours
   EXPECT_EQ(r.tv_test, 0.0);  // the flicker at x >= 16 is outside
   MetricsReport whole = Measure({.test = dir / "test", .reference = dir / "ref"});
   EXPECT_GT(whole.tv_test, 0.0);
@@ -241,8 +246,10 @@ TEST(MetricsReportErrors, DifferentLengthsNameBothSequences) {
 
 TEST(MetricsReportErrors, DifferentSizes) {
   TempDir dir;
-  WriteSequence(dir / "test", Spec(3, [](int, int, int) { return 1.0f; }, 16));
-  WriteSequence(dir / "ref", Spec(3, [](int, int, int) { return 1.0f; }, 32));
+  WriteSequence(dir / "test", Spec(
+                                  3, [](int, int, int) { return 1.0f; }, 16));
+  WriteSequence(dir / "ref", Spec(
+                                 3, [](int, int, int) { return 1.0f; }, 32));
   auto r = ComputeMetrics({.test = dir / "test", .reference = dir / "ref"});
   ASSERT_FALSE(r);
   EXPECT_NE(r.error().find("16x16"), std::string::npos) << r.error();
@@ -265,7 +272,8 @@ TEST(MetricsReportErrors, BadOptions) {
 
 TEST(MetricsReportErrors, TruncatedFrameStopsThePass) {
   TempDir dir;
-  WriteSequence(dir / "test", Spec(4, [](int t, int x, int) { return 0.1f * (t + x); }, 64));
+  WriteSequence(dir / "test", Spec(
+                                  4, [](int t, int x, int) { return 0.1f * (t + x); }, 64));
   const auto file = dir / "test" / "frame_0002.exr";
   std::filesystem::resize_file(file, std::filesystem::file_size(file) / 2);
   auto r = ComputeMetrics({.test = dir / "test"});

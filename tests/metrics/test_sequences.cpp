@@ -14,9 +14,8 @@ namespace shimmer::metrics::testing {
 TempDir::TempDir() {
   static std::atomic<int> counter{0};
   const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
-  path_ = std::filesystem::temp_directory_path() /
-          ("shimmer-metrics-test-" + std::to_string(::getpid()) + "-" + std::to_string(stamp) + "-" +
-           std::to_string(counter++));
+  path_ = std::filesystem::temp_directory_path() / ("shimmer-metrics-test-" + std::to_string(::getpid()) + "-" +
+                                                    std::to_string(stamp) + "-" + std::to_string(counter++));
   std::filesystem::create_directories(path_);
 }
 
@@ -33,22 +32,17 @@ void WriteSequence(const std::filesystem::path& dir, const SequenceSpec& spec) {
       for (int x = 0; x < spec.width; ++x) v.at<float>(y, x) = spec.value(t, x, y);
     std::vector<MatChannel> channels;
     switch (spec.layout) {
-      case Layout::kBeautyRgb:
-        channels = {{"R", v}, {"G", v}, {"B", v}};
-        break;
+      case Layout::kBeautyRgb: channels = {{"R", v}, {"G", v}, {"B", v}}; break;
       case Layout::kBeautyRgbHalf:
-        channels = {{"R", v, true}, {"G", v, true}, {"B", v, true},
-                    {"A", cv::Mat::ones(v.size(), CV_32F), true}};
+        channels = {{"R", v, true}, {"G", v, true}, {"B", v, true}, {"A", cv::Mat::ones(v.size(), CV_32F), true}};
         break;
       case Layout::kSpecularLayer: {
         cv::Mat half_grey(v.size(), CV_32F, cv::Scalar(0.5));
-        channels = {{"R", half_grey}, {"G", half_grey}, {"B", half_grey},
+        channels = {{"R", half_grey},  {"G", half_grey},  {"B", half_grey},
                     {"specular.R", v}, {"specular.G", v}, {"specular.B", v}};
         break;
       }
-      case Layout::kLuminanceY:
-        channels = {{"Y", v}};
-        break;
+      case Layout::kLuminanceY: channels = {{"Y", v}}; break;
     }
     if (spec.motion) {
       cv::Mat mx(v.size(), CV_32F), my(v.size(), CV_32F);

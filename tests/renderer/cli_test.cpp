@@ -44,11 +44,13 @@ void ExpectOneClearError(const CliRun& r, const std::string& needle) {
 TEST(GpuCli, DefaultsRenderASequenceAndItsReference) {
   fs::path dir = FreshDir("defaults"), ref = FreshDir("defaults_ref");
   CliRun r = Shimmer("render --scene sphere-field --camera orbit --variant none --frames 3 --size 32 32 --out " +
-                  dir.string());
+                     dir.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(FrameFiles(dir), 3);
-  CliRun rr = Shimmer("render --scene sphere-field --camera orbit --variant none --frames 2 --size 32 32 "
-                   "--reference-spp 2 --out " + ref.string());
+  CliRun rr = Shimmer(
+      "render --scene sphere-field --camera orbit --variant none --frames 2 --size 32 32 "
+      "--reference-spp 2 --out " +
+      ref.string());
   ASSERT_EQ(rr.exit_code, 0) << rr.output;
   EXPECT_EQ(FrameFiles(ref), 2);
   std::ifstream in(ref / "sequence.json");
@@ -69,7 +71,7 @@ TEST(GpuCli, UserVariantFileRendersAndCompileErrorsNameFileAndLine) {
          "}\n";
   }
   CliRun ok = Shimmer("render --scene sphere --frames 1 --size 16 16 --variant-file " + file.string() + " --out " +
-                   dir.string());
+                      dir.string());
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
   EXPECT_EQ(FrameFiles(dir), 1);
   fs::remove_all(dir);
@@ -80,7 +82,7 @@ TEST(GpuCli, UserVariantFileRendersAndCompileErrorsNameFileAndLine) {
          "}\n";
   }
   CliRun bad = Shimmer("render --scene sphere --frames 1 --size 16 16 --variant-file " + file.string() + " --out " +
-                    dir.string());
+                       dir.string());
   ExpectOneClearError(bad, file.string() + ":2");
   EXPECT_EQ(FrameFiles(dir), 0);
   fs::remove(file);
@@ -95,7 +97,8 @@ TEST(GpuCli, BadInputGetsOneMessageAndNoFrames) {
   ExpectOneClearError(Shimmer(base + "--variant tk19 --param fp_max=1"), "has no parameter 'fp_max'");
   ExpectOneClearError(Shimmer(base + "--variant tk19 --param sigma2=abc"), "is not a finite number");
   ExpectOneClearError(Shimmer(base + "--material phong:0.1"), "NDF must be ggx or beckmann");
-  ExpectOneClearError(Shimmer(base + "--camera spin"), "--camera must be one of orbit, pan, dolly, vr-jitter, static, got 'spin'");
+  ExpectOneClearError(Shimmer(base + "--camera spin"),
+                      "--camera must be one of orbit, pan, dolly, vr-jitter, static, got 'spin'");
   ExpectOneClearError(Shimmer(base + "--derivatives sobel"), "--derivatives");
   ExpectOneClearError(Shimmer(base + "--variant k16-ggx-rect --material beckmann:0.1"), "GGX only");
   ExpectOneClearError(Shimmer(base + "--variant tk19 --reference-spp 4"), "reference renders variant none");
@@ -113,8 +116,9 @@ TEST(GpuCli, UnwritableOutputDirectory) {
 
 TEST(GpuCli, NoVulkanDevice) {
   fs::path dir = FreshDir("nodevice");
-  CliRun r = Shimmer("render --scene sphere --frames 1 --size 16 16 --out " + dir.string(),
-                  "XDG_RUNTIME_DIR=/tmp VK_ICD_FILENAMES=/nonexistent/icd.json VK_DRIVER_FILES=/nonexistent/icd.json");
+  CliRun r =
+      Shimmer("render --scene sphere --frames 1 --size 16 16 --out " + dir.string(),
+              "XDG_RUNTIME_DIR=/tmp VK_ICD_FILENAMES=/nonexistent/icd.json VK_DRIVER_FILES=/nonexistent/icd.json");
   ExpectOneClearError(r, "Vulkan");
   EXPECT_EQ(FrameFiles(dir), 0);
   CliRun named = Shimmer("render --scene sphere --frames 1 --size 16 16 --device no-such-gpu --out " + dir.string());

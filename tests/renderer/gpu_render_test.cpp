@@ -20,9 +20,9 @@
 #include <functional>
 
 #include "shimmer/renderer/renderer.h"
-#include "test_hooks.h"
 #include "shimmer/renderer/scene.h"
 #include "shimmer/renderer/shading.h"
+#include "test_hooks.h"
 
 namespace shimmer::render {
 namespace {
@@ -104,9 +104,9 @@ void ExpectMatchesOracle(const std::string& scene_name, const std::string& varia
       max_spec = std::max(max_spec, Luminance(o.specular));
       if (!ok) {
         if (first_bad.empty())
-          first_bad = std::to_string(x) + "," + std::to_string(y) + " depth " + std::to_string(o.depth) + ": gpu spec " + std::to_string(Luminance(gs)) +
-                      " cpu " + std::to_string(Luminance(o.specular)) + ", gpu rough " +
-                      std::to_string(f.at(kRoughness, x, y)) + " cpu " +
+          first_bad = std::to_string(x) + "," + std::to_string(y) + " depth " + std::to_string(o.depth) +
+                      ": gpu spec " + std::to_string(Luminance(gs)) + " cpu " + std::to_string(Luminance(o.specular)) +
+                      ", gpu rough " + std::to_string(f.at(kRoughness, x, y)) + " cpu " +
                       std::to_string(std::sqrt(o.alpha_eff.x * o.alpha_eff.y)) + ", gpu fp " +
                       std::to_string(f.at(kFootprintX, x, y)) + " cpu " + std::to_string(o.footprint.x);
         ++bad;
@@ -127,7 +127,8 @@ TEST(GpuOracle, SphereAllDerivativeSources) {
 
 TEST(GpuOracle, SphereField) {
   for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
-    for (const char* v : {"none", "k16-beckmann-rect", "tk21", "toksvig-quad"}) ExpectMatchesOracle("sphere-field", v, d);
+    for (const char* v : {"none", "k16-beckmann-rect", "tk21", "toksvig-quad"})
+      ExpectMatchesOracle("sphere-field", v, d);
 }
 
 TEST(GpuOracle, Wires) {
@@ -137,7 +138,8 @@ TEST(GpuOracle, Wires) {
 
 TEST(GpuOracle, BumpyPlane) {
   for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
-    for (const char* v : {"none", "godot", "unity-hdrp", "k16-ggx-rect-stable"}) ExpectMatchesOracle("bumpy-plane", v, d, 20.0);
+    for (const char* v : {"none", "godot", "unity-hdrp", "k16-ggx-rect-stable"})
+      ExpectMatchesOracle("bumpy-plane", v, d, 20.0);
 }
 
 // The material's NDF reaches the kernel as a specialization constant; a
@@ -453,9 +455,14 @@ TEST(GpuSequence, RefusedSettingsCreateNothing) {
   for (auto change : std::vector<std::function<void(RenderSettings&)>>{
            [](RenderSettings& r) { r.frames = 0; }, [](RenderSettings& r) { r.width = 0; },
            [](RenderSettings& r) { r.max_rounds = 0; }, [](RenderSettings& r) { r.max_rounds = -1; },
-           [](RenderSettings& r) { r.fps = std::nan(""); }, [](RenderSettings& r) { r.variant = "supersample-99999999999"; },
-           [](RenderSettings& r) { r.variant = "tk19", r.param_overrides = {{"sigma2", -5}}; },
-           [](RenderSettings& r) { r.variant_file = "/nonexistent/user.glsl", r.param_overrides = {{"fp_max", std::nan("")}}; },
+           [](RenderSettings& r) { r.fps = std::nan(""); },
+           [](RenderSettings& r) { r.variant = "supersample-99999999999"; },
+           [](RenderSettings& r) {
+             r.variant = "tk19", r.param_overrides = {{"sigma2", -5}};
+           },
+           [](RenderSettings& r) {
+             r.variant_file = "/nonexistent/user.glsl", r.param_overrides = {{"fp_max", std::nan("")}};
+           },
            [](RenderSettings& r) { r.reference_spp = 65; }}) {
     RenderSettings bad = s;
     change(bad);

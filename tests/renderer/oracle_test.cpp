@@ -36,8 +36,8 @@ TEST(Oracle, BvhTraceMatchesBruteForce) {
   int hits = 0;
   for (int y = 0; y < size; y += 1)
     for (int x = 0; x < size; x += 1) {
-      auto r = shading::ShadePixel(words, cam, s.light, s.material, 0, shading::DerivativeSource::kAnalytic, {},
-                                   {x, y});
+      auto r =
+          shading::ShadePixel(words, cam, s.light, s.material, 0, shading::DerivativeSource::kAnalytic, {}, {x, y});
       // The same ray in the test's own terms.
       double sx = cam.tan_half_fov_y * cam.width / cam.height, sy = cam.tan_half_fov_y;
       glm::dvec3 d = glm::normalize(cam.fwd + cam.right * ((2 * (x + 0.5) / size - 1) * sx) +
@@ -65,7 +65,8 @@ TEST(Oracle, PixelCandidatesGiveTheBvhHitForEveryRayInThePixel) {
     const int features = scene::SceneFeatures(s);
     int pixels = 0, overflow = 0, rays = 0, hits = 0;
     for (int frame : {0, 7, 19}) {
-      shading::CameraDesc cam = scene::CameraAt(frame == 7 ? scene::CameraPath::kDolly : scene::CameraPath::kOrbit, s.rig, frame, 30, 96, 72);
+      shading::CameraDesc cam =
+          scene::CameraAt(frame == 7 ? scene::CameraPath::kDolly : scene::CameraPath::kOrbit, s.rig, frame, 30, 96, 72);
       for (int y = 0; y < cam.height; ++y)
         for (int x = 0; x < cam.width; ++x) {
           ++pixels;

@@ -58,26 +58,23 @@ TEST(SceneJson, ErrorsNameTheSourceAndField) {
     const char* json;
     const char* expect;
   };
-  for (const Case& c : {Case{"{", "not valid JSON"}, Case{"{}", "'primitives'"},
-                        Case{R"({"primitives": [{"type": "cube"}]})", "unknown type 'cube'"},
-                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radius": -1}]})",
-                             "primitives[0]: 'radius' must be a number > 0"},
-                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radius": 0}]})", "> 0"},
-                        Case{R"({"primitives": [{"type": "sphere", "center": [0, 0]}]})", "'center'"},
-                        Case{R"({"primitives": [{"type": "sphere", "radius": 1}]})", "'center' is required"},
-                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radus": 1}]})",
-                             "unknown key 'radus'"},
-                        Case{R"({"primitives": [{"type": "sphere", "center": [1e300, 0, 0]}]})", "'center' must be finite"},
-                        Case{R"({"name": 5, "primitives": [{"type": "sphere", "center": [0,0,0]}]})",
-                             "'name' must be a string"},
-                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,1e999]}]})", "bad.json:1:"},
-                        Case{R"({"primitives": [{"type": "capsule", "a": [0,0,0], "b": [0,0,0]}]})", "coincide"},
-                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0]}], "light": {"type": "area"}})",
-                             "light"},
-                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0]}], "light": {"type": 3}})",
-                             "light: 'type' must be a string"},
-                        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0]}], "material": "ggx:7"})",
-                             "material"}}) {
+  for (const Case& c :
+       {Case{"{", "not valid JSON"}, Case{"{}", "'primitives'"},
+        Case{R"({"primitives": [{"type": "cube"}]})", "unknown type 'cube'"},
+        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radius": -1}]})",
+             "primitives[0]: 'radius' must be a number > 0"},
+        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radius": 0}]})", "> 0"},
+        Case{R"({"primitives": [{"type": "sphere", "center": [0, 0]}]})", "'center'"},
+        Case{R"({"primitives": [{"type": "sphere", "radius": 1}]})", "'center' is required"},
+        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radus": 1}]})", "unknown key 'radus'"},
+        Case{R"({"primitives": [{"type": "sphere", "center": [1e300, 0, 0]}]})", "'center' must be finite"},
+        Case{R"({"name": 5, "primitives": [{"type": "sphere", "center": [0,0,0]}]})", "'name' must be a string"},
+        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,1e999]}]})", "bad.json:1:"},
+        Case{R"({"primitives": [{"type": "capsule", "a": [0,0,0], "b": [0,0,0]}]})", "coincide"},
+        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0]}], "light": {"type": "area"}})", "light"},
+        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0]}], "light": {"type": 3}})",
+             "light: 'type' must be a string"},
+        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0]}], "material": "ggx:7"})", "material"}}) {
     auto s = ParseSceneJson(c.json, "bad.json");
     EXPECT_FALSE(s.ok()) << c.json;
     EXPECT_NE(s.error().find("bad.json"), std::string::npos) << s.error();
@@ -117,7 +114,8 @@ TEST(CameraPath, DeterministicMovingAndOrthonormal) {
   // vr-jitter stays within a few millimetres per metre of viewing distance.
   auto base = CameraAt(scene::CameraPath::kStatic, rig, 0, 30, 64, 64);
   for (int f = 0; f < 90; ++f)
-    EXPECT_LT(glm::length(CameraAt(scene::CameraPath::kVrJitter, rig, f, 90, 64, 64).pos - base.pos), 0.01 * rig.distance);
+    EXPECT_LT(glm::length(CameraAt(scene::CameraPath::kVrJitter, rig, f, 90, 64, 64).pos - base.pos),
+              0.01 * rig.distance);
   // dolly halves the distance every 2 s.
   auto d = CameraAt(scene::CameraPath::kDolly, rig, 60, 30, 64, 64);
   EXPECT_NEAR(glm::length(d.pos - rig.target), rig.distance / 2, 1e-9);

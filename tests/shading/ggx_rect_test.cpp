@@ -42,7 +42,7 @@ std::vector<RectCase> HardGrid() {
   for (double a : alphas)
     for (double fx : fps)
       for (double fy : fps) {
-        const double centres[][2] = {{0, 0}, {a, 0}, {10 * a, 3 * a}, {100 * a, 0}, {100 * a, -100 * a},
+        const double centres[][2] = {{0, 0},     {a, 0},     {10 * a, 3 * a}, {100 * a, 0}, {100 * a, -100 * a},
                                      {3.0, 0.5}, {-5.0, 5.0}};
         for (const auto& c : centres) cases.push_back({a, a, fx, fy, c[0], c[1]});
       }

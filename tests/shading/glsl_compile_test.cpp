@@ -155,16 +155,18 @@ TEST(GlslCompile, KernelCallingEveryVariantCompiles) {
 
 TEST(GlslCompile, ErrorNamesFileAndLine) {
   GlslFile user{"my_variant.glsl", "real myVariant(real x) {\n  return x +;\n}\n"};
-  std::string main = "#version 460\n#extension GL_GOOGLE_include_directive : require\n#define real float\n"
-                     "#include \"my_variant.glsl\"\nlayout(local_size_x = 1) in;\nvoid main() {}\n";
+  std::string main =
+      "#version 460\n#extension GL_GOOGLE_include_directive : require\n#define real float\n"
+      "#include \"my_variant.glsl\"\nlayout(local_size_x = 1) in;\nvoid main() {}\n";
   auto r = CompileCompute({"kernel.comp", main}, std::span<const GlslFile>(&user, 1));
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().find("my_variant.glsl:2"), std::string::npos) << r.error();
 }
 
 TEST(GlslCompile, MissingIncludeIsAnError) {
-  std::string main = "#version 460\n#extension GL_GOOGLE_include_directive : require\n"
-                     "#include \"nowhere.glsl\"\nlayout(local_size_x = 1) in;\nvoid main() {}\n";
+  std::string main =
+      "#version 460\n#extension GL_GOOGLE_include_directive : require\n"
+      "#include \"nowhere.glsl\"\nlayout(local_size_x = 1) in;\nvoid main() {}\n";
   auto r = CompileCompute({"kernel.comp", main});
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().find("nowhere.glsl"), std::string::npos) << r.error();

@@ -14,14 +14,11 @@
 namespace shimmer::test {
 
 inline double GaussKronrod15(const std::function<double(double)>& f, double a, double b, double* err) {
-  static const double xk[8] = {0.991455371120812639, 0.949107912342758525, 0.864864423359769073,
-                               0.741531185599394440, 0.586087235467691130, 0.405845151377397167,
-                               0.207784955007898468, 0.000000000000000000};
-  static const double wk[8] = {0.022935322010529225, 0.063092092629978553, 0.104790010322250184,
-                               0.140653259715525919, 0.169004726639267903, 0.190350578064785410,
-                               0.204432940075298892, 0.209482141084727828};
-  static const double wg[4] = {0.129484966168869693, 0.279705391489276668, 0.381830050505118945,
-                               0.417959183673469388};
+  static const double xk[8] = {0.991455371120812639, 0.949107912342758525, 0.864864423359769073, 0.741531185599394440,
+                               0.586087235467691130, 0.405845151377397167, 0.207784955007898468, 0.000000000000000000};
+  static const double wk[8] = {0.022935322010529225, 0.063092092629978553, 0.104790010322250184, 0.140653259715525919,
+                               0.169004726639267903, 0.190350578064785410, 0.204432940075298892, 0.209482141084727828};
+  static const double wg[4] = {0.129484966168869693, 0.279705391489276668, 0.381830050505118945, 0.417959183673469388};
   const double c = 0.5 * (a + b), h = 0.5 * (b - a);
   const double fc = f(c);
   double k = wk[7] * fc, g = wg[3] * fc;
@@ -56,7 +53,8 @@ inline double Integrate(const std::function<double(double)>& f, double a, double
   pts.push_back(b);
   std::sort(pts.begin() + 1, pts.end() - 1);
   double sum = 0;
-  for (size_t i = 0; i + 1 < pts.size(); ++i) sum += IntegrateInterval(f, pts[i], pts[i + 1], rel_tol, abs_tol, max_depth);
+  for (size_t i = 0; i + 1 < pts.size(); ++i)
+    sum += IntegrateInterval(f, pts[i], pts[i + 1], rel_tol, abs_tol, max_depth);
   return sum;
 }
 

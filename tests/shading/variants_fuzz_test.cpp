@@ -36,8 +36,29 @@ constexpr int kDoubleInputs = 100'000;
 template <class T>
 std::vector<T> MagnitudePool(std::mt19937_64& rng, int count, double top, std::vector<double> specials) {
   const T denorm = std::numeric_limits<T>::denorm_min(), tiny = std::numeric_limits<T>::min();
-  for (double s : {0.0, double(denorm), double(denorm) * 3, double(tiny) * 0.5, double(tiny), 1e-30, 1e-20, 1e-12,
-                   1e-8, 1e-4, 1e-3, 0.01, 0.1, 0.5, 1.0, 2.0, 10.0, 100.0, 1e4, 1e8, 1e16, 1e19, 1e20})
+  for (double s : {0.0,
+                   double(denorm),
+                   double(denorm) * 3,
+                   double(tiny) * 0.5,
+                   double(tiny),
+                   1e-30,
+                   1e-20,
+                   1e-12,
+                   1e-8,
+                   1e-4,
+                   1e-3,
+                   0.01,
+                   0.1,
+                   0.5,
+                   1.0,
+                   2.0,
+                   10.0,
+                   100.0,
+                   1e4,
+                   1e8,
+                   1e16,
+                   1e19,
+                   1e20})
     specials.push_back(s);
   std::vector<T> pool;
   for (double s : specials)
@@ -66,9 +87,12 @@ std::vector<glm::vec<3, T>> NormalPool(std::mt19937_64& rng, int count) {
   std::vector<glm::vec<3, T>> pool;
   for (int i = 0; i < count; ++i) {
     double z;
-    if (i % 3 == 0) z = zs[(i / 3) % std::size(zs)];
-    else if (i % 3 == 1) z = 1e-3 * (2 * u01(rng) - 1);
-    else z = 2 * u01(rng) - 1;
+    if (i % 3 == 0)
+      z = zs[(i / 3) % std::size(zs)];
+    else if (i % 3 == 1)
+      z = 1e-3 * (2 * u01(rng) - 1);
+    else
+      z = 2 * u01(rng) - 1;
     const double phi = 2 * 3.14159265358979323846 * u01(rng), r = std::sqrt(std::max(0.0, 1 - z * z));
     pool.push_back({T(r * std::cos(phi)), T(r * std::sin(phi)), T(z)});
   }
@@ -77,10 +101,10 @@ std::vector<glm::vec<3, T>> NormalPool(std::mt19937_64& rng, int count) {
 
 template <class T>
 struct Pools {
-  std::vector<T> alpha;                  // [0, 10]
-  std::vector<T> value;                  // [-1e20, 1e20]
+  std::vector<T> alpha;  // [0, 10]
+  std::vector<T> value;  // [-1e20, 1e20]
   std::vector<glm::vec<3, T>> normal;
-  std::vector<std::vector<T>> param;     // per ParamFields() entry, [lower, upper]
+  std::vector<std::vector<T>> param;  // per ParamFields() entry, [lower, upper]
 
   explicit Pools(std::uint64_t seed) {
     std::mt19937_64 rng(seed);
@@ -172,11 +196,11 @@ std::string Describe(const VariantInfo& v, Ndf ndf, int index, glm::vec<2, T> a,
   auto v2 = [&](glm::vec<2, T> x) { return "(" + s(x.x) + ", " + s(x.y) + ")"; };
   auto v3 = [&](glm::vec<3, T> x) { return "(" + s(x.x) + ", " + s(x.y) + ", " + s(x.z) + ")"; };
   return std::string(v.name) + " " + std::string(NdfName(ndf)) + " " + (sizeof(T) == 4 ? "float" : "double") +
-         " input #" + std::to_string(index) + ": alpha " + v2(a) + " hpp " + v2(f.hpp) + " dhpp_dx " +
-         v2(f.dhpp_dx) + " dhpp_dy " + v2(f.dhpp_dy) + " n " + v3(f.n) + " dn_dx " + v3(f.dn_dx) + " dn_dy " +
-         v3(f.dn_dy) + " dng_dx " + v3(f.dng_dx) + " dng_dy " + v3(f.dng_dy) + " fp_max " + s(p.fp_max) +
-         " fp_min_cap " + s(p.fp_min_cap) + " sigma2 " + s(p.sigma2) + " kappa " + s(p.kappa) +
-         " -> slope_density " + s(r.slope_density) + " density " + s(r.density) + " alpha_eff " + v2(r.alpha_eff);
+         " input #" + std::to_string(index) + ": alpha " + v2(a) + " hpp " + v2(f.hpp) + " dhpp_dx " + v2(f.dhpp_dx) +
+         " dhpp_dy " + v2(f.dhpp_dy) + " n " + v3(f.n) + " dn_dx " + v3(f.dn_dx) + " dn_dy " + v3(f.dn_dy) +
+         " dng_dx " + v3(f.dng_dx) + " dng_dy " + v3(f.dng_dy) + " fp_max " + s(p.fp_max) + " fp_min_cap " +
+         s(p.fp_min_cap) + " sigma2 " + s(p.sigma2) + " kappa " + s(p.kappa) + " -> slope_density " +
+         s(r.slope_density) + " density " + s(r.density) + " alpha_eff " + v2(r.alpha_eff);
 }
 
 template <class T>
@@ -191,8 +215,8 @@ void Campaign(const VariantInfo& v, int count) {
   const Pools<T>& pools = SharedPools<T>();
   // Both NDFs for every variant: the GGX-only ones must not break on Beckmann either.
   for (Ndf ndf : {Ndf::kGgx, Ndf::kBeckmann}) {
-    InputGenerator<T> gen(pools, 0x9e3779b97f4a7c15ull * std::uint64_t(v.id + 1) + std::uint64_t(ndf) +
-                                     (sizeof(T) == 4 ? 0 : 0x100));
+    InputGenerator<T> gen(
+        pools, 0x9e3779b97f4a7c15ull * std::uint64_t(v.id + 1) + std::uint64_t(ndf) + (sizeof(T) == 4 ? 0 : 0x100));
     glm::vec<2, T> alpha;
     Footprint<T> f;
     Params<T> p;

@@ -56,9 +56,8 @@ double Normalisation(const VariantInfo& v, Ndf ndf, glm::dvec2 alpha, double fx,
   std::vector<double> theta_breaks;
   for (double k : {0.3, 1.0, 3.0, 10.0, 30.0, 100.0}) theta_breaks.push_back(std::atan(k * scale));
   auto over_theta = [&](double phi) {
-    return test::Integrate(
-        [&](double theta) { return density(theta, phi) * std::cos(theta) * std::sin(theta); }, 0, kPi / 2,
-        theta_breaks, 1e-9, 1e-12, 40);
+    return test::Integrate([&](double theta) { return density(theta, phi) * std::cos(theta) * std::sin(theta); }, 0,
+                           kPi / 2, theta_breaks, 1e-9, 1e-12, 40);
   };
   return test::Integrate(over_theta, 0, 2 * kPi, {kPi / 2, kPi, 1.5 * kPi}, 1e-6, 1e-9, 8);
 }
@@ -76,8 +75,7 @@ TEST(Variants, EffectiveNdfIsNormalisedInSolidAngle) {
           EXPECT_LT(integral, 1 - 1e-3) << v.name << " alpha " << alpha.x << "," << alpha.y;
           continue;
         }
-        EXPECT_NEAR(integral, 1.0, 1e-3) << v.name << " " << NdfName(ndf) << " alpha " << alpha.x << ","
-                                         << alpha.y;
+        EXPECT_NEAR(integral, 1.0, 1e-3) << v.name << " " << NdfName(ndf) << " alpha " << alpha.x << "," << alpha.y;
       }
     }
   }
@@ -120,8 +118,8 @@ TEST(Variants, FloatAgreesWithDoubleOnHardCases) {
             if (k < 3) Track(worst_near_lobe, f.slope_density, d.slope_density, where);
           }
         }
-    std::printf("%-28s float vs double: worst relative difference %.3g (%s)\n", std::string(v.name).c_str(),
-                worst.rel, worst.where.c_str());
+    std::printf("%-28s float vs double: worst relative difference %.3g (%s)\n", std::string(v.name).c_str(), worst.rel,
+                worst.where.c_str());
     if (v.name == "k16-ggx-rect") {
       // The seed's closed form: usable near the lobe thanks to its fp_min
       // clamp, meaningless at grazing slopes in float (see ggx_rect_test.cpp).
@@ -231,8 +229,8 @@ TEST(Variants, ParallelogramOfRankOneFootprintAgreesWithDouble) {
         ff.dhpp_dy = glm::vec2(fd.dhpp_dy);
         const auto rd = EvaluateVariant<double>(v->id, ndf, {a, a}, fd, {});
         const auto rf = EvaluateVariant<float>(v->id, ndf, {float(a), float(a)}, ff, {});
-        const std::string where = std::string(NdfName(ndf)) + " alpha " + std::to_string(a) + " slope " +
-                                  std::to_string(s);
+        const std::string where =
+            std::string(NdfName(ndf)) + " alpha " + std::to_string(a) + " slope " + std::to_string(s);
         EXPECT_TRUE(std::isfinite(rf.density)) << where;
         EXPECT_NEAR(rf.slope_density, rd.slope_density, 1e-4 * rd.slope_density + 1e-30) << where;
         EXPECT_NEAR(rf.density, rd.density, 1e-4 * rd.density + 1e-30) << where;
@@ -310,12 +308,11 @@ TEST(Variants, K16GgxRectMatchesQuadratureOfItsClampedRect) {
     const double t = 1 + (x * x + y * y) / (a * a);
     return 1 / (kPi * a * a * t * t);
   };
-  const double mean = test::Integrate(
-                          [&](double x) {
-                            return test::Integrate([&](double y) { return p22(x, y); }, 0.01 - a, 0.01 + a, {0.0});
-                          },
-                          0.03 - a, 0.03 + a, {}, 1e-9, 0, 30) /
-                      (4 * a * a);
+  const double mean =
+      test::Integrate(
+          [&](double x) { return test::Integrate([&](double y) { return p22(x, y); }, 0.01 - a, 0.01 + a, {0.0}); },
+          0.03 - a, 0.03 + a, {}, 1e-9, 0, 30) /
+      (4 * a * a);
   EXPECT_NEAR(r.slope_density / mean, 1.0, 1e-8);
 }
 

@@ -10,9 +10,9 @@
 namespace shimmer::experiments {
 
 struct Fit1D {
-  double best = 0;       // the parameter value
-  double objective = 0;  // J(best)
-  int evaluations = 0;   // calls of J, sweep included
+  double best = 0;              // the parameter value
+  double objective = 0;         // J(best)
+  int evaluations = 0;          // calls of J, sweep included
   bool ceres_improved = false;  // false when the sweep's best point stood
   // evaluations == samples.size(): distinct values of p
   std::vector<std::pair<double, double>> samples;  // (p, J(p)) of every evaluation

@@ -45,8 +45,8 @@ struct MaterialFit {
   std::string variant, param, material, ndf;
   double alpha = 0;  // sqrt(alpha_x alpha_y)
   double lo = 0, hi = 0;
-  Fit1D search;      // every evaluation of J on the training shots
-  double seconds = 0;  // render + measure time of every job it used (references included)
+  Fit1D search;                    // every evaluation of J on the training shots
+  double seconds = 0;              // render + measure time of every job it used (references included)
   ObjectiveValue train, validate;  // at the fitted value
   std::vector<double> defaults;
   std::vector<ObjectiveValue> train_defaults, validate_defaults;

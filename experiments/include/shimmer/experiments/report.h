@@ -20,6 +20,6 @@ std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<
 // (StagedDirectory), report.md last. Plots need gnuplot; without it the
 // scripts and data are still written and a warning names the scripts.
 Status WriteReport(const std::vector<JobResult>& rows, const std::string& title, const std::string& out_dir,
-                        std::vector<std::string>* warnings);
+                   std::vector<std::string>* warnings);
 
 }  // namespace shimmer::experiments

@@ -12,14 +12,14 @@
 
 #include "shimmer/core/result.h"
 #include "shimmer/experiments/job.h"
-#include "shimmer/renderer/renderer.h"
 #include "shimmer/experiments/result_store.h"
 #include "shimmer/experiments/spec.h"
+#include "shimmer/renderer/renderer.h"
 
 namespace shimmer::experiments {
 
 struct RunProgress {
-  int done = 0;     // jobs finished in this run (skipped ones included)
+  int done = 0;  // jobs finished in this run (skipped ones included)
   int total = 0;
   int skipped = 0;  // found finished in the store
   double elapsed_s = 0;
@@ -28,12 +28,12 @@ struct RunProgress {
 };
 
 struct RunOptions {
-  std::string db_path;          // results store
-  std::string work_dir;         // frame cache: references and jobs by id
+  std::string db_path;   // results store
+  std::string work_dir;  // frame cache: references and jobs by id
   int shard_index = 0, shard_count = 1;
   bool keep_frames = false;
-  int jobs = 1;                 // jobs measured at once (each renders, then measures)
-  std::string device;           // Vulkan device name substring
+  int jobs = 1;        // jobs measured at once (each renders, then measures)
+  std::string device;  // Vulkan device name substring
   std::function<void(const RunProgress&)> progress;
 };
 

@@ -19,8 +19,8 @@ struct VariantSweep {
 };
 
 struct ReferenceQuality {
-  int spp = 8;             // N x N stratified samples per pixel
-  double tolerance = 0;    // > 0: adaptive to this relative standard error instead
+  int spp = 8;           // N x N stratified samples per pixel
+  double tolerance = 0;  // > 0: adaptive to this relative standard error instead
 };
 
 struct MetricOptions {

@@ -29,14 +29,14 @@ struct SequenceRequest {
 };
 
 struct ExrSequence {
-  std::filesystem::path source;                // the directory or sequence.json given
-  std::vector<std::filesystem::path> frames;   // sorted
+  std::filesystem::path source;               // the directory or sequence.json given
+  std::vector<std::filesystem::path> frames;  // sorted
   int width = 0, height = 0;
   double fps = 60;
-  std::string fps_source;                      // "sequence.json", "--fps" or "default"
-  std::string layer;                           // chosen layer, "beauty" for unprefixed R,G,B
-  std::vector<std::string> layers;             // every layer with luminance in frame 0
-  bool has_motion = false;                     // every frame has motion.X and motion.Y
+  std::string fps_source;           // "sequence.json", "--fps" or "default"
+  std::string layer;                // chosen layer, "beauty" for unprefixed R,G,B
+  std::vector<std::string> layers;  // every layer with luminance in frame 0
+  bool has_motion = false;          // every frame has motion.X and motion.Y
   std::vector<std::string> warnings;
 };
 
@@ -51,7 +51,7 @@ struct LuminanceFrame {
 
 // Reads one frame's luminance of `layer` (and motion.X/Y when asked).
 Result<LuminanceFrame> ReadFrame(const std::filesystem::path& file, const std::string& layer, int width, int height,
-                        bool with_motion);
+                                 bool with_motion);
 
 // Any single-channel image used as a mask (EXR or anything OpenCV reads):
 // nonzero = inside. Returned as CV_8U 0/1.

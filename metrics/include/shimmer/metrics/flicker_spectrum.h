@@ -55,7 +55,7 @@ class FlickerSpectrum {
   int step_;
   double fs_;
   std::vector<double> window_;
-  double density_scale_;  // 1 / (fs sum w^2)
+  double density_scale_;     // 1 / (fs sum w^2)
   std::vector<float> ring_;  // slot (t mod L) holds frame t, P floats
   int frames_ = 0;
   int segments_ = 0;

@@ -2,8 +2,8 @@
 // luminance: where flicker matters and where a whole-frame mean would dilute it.
 #pragma once
 
-#include "shimmer/metrics/exr_sequence.h"
 #include "shimmer/core/result.h"
+#include "shimmer/metrics/exr_sequence.h"
 
 namespace shimmer::metrics {
 

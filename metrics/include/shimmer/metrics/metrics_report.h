@@ -13,9 +13,9 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
+#include "shimmer/core/result.h"
 #include "shimmer/metrics/exr_sequence.h"
 #include "shimmer/metrics/highlight_mask.h"
-#include "shimmer/core/result.h"
 
 namespace shimmer::metrics {
 
@@ -55,17 +55,17 @@ struct MetricsReport {
   std::string test, reference;  // as given
   std::string layer, region;    // region: "frame", "mask:<file>" or "highlight"
   int frames = 0, width = 0, height = 0;
-  long long pixels = 0;         // in the region
+  long long pixels = 0;  // in the region
   double fps = 0;
   std::string fps_source;
 
   double tv_test = 0;
   std::optional<double> tv_ref, tv_err, tv_ratio, energy_bias, temporal_diff_err, rmse, relmse;
   std::vector<double> energy_bias_per_frame, rmse_per_frame;  // with a reference
-  double temporal_diff_test = 0;  // mean over t >= 1 and M of |T_t - T_{t-1}|
-  std::optional<double> warp_err;  // when the test frames carry motion.X/Y
-  long long nan_pixels = 0;        // region pixels with a non-finite sample anywhere
-  long long nan_samples = 0;       // (pixel, frame) samples that were non-finite
+  double temporal_diff_test = 0;                              // mean over t >= 1 and M of |T_t - T_{t-1}|
+  std::optional<double> warp_err;                             // when the test frames carry motion.X/Y
+  long long nan_pixels = 0;                                   // region pixels with a non-finite sample anywhere
+  long long nan_samples = 0;                                  // (pixel, frame) samples that were non-finite
   FlickerResult flicker;
 
   // Per-pixel maps (CV_32F), 0 outside the region and at excluded pixels.

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "shimmer/metrics/metrics_report.h"
 #include "shimmer/core/result.h"
+#include "shimmer/metrics/metrics_report.h"
 
 namespace shimmer::metrics {
 

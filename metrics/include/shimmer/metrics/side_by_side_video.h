@@ -8,8 +8,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
 
-#include "shimmer/metrics/heatmap.h"
 #include "shimmer/core/result.h"
+#include "shimmer/metrics/heatmap.h"
 
 namespace shimmer::metrics {
 

@@ -16,11 +16,10 @@ namespace shimmer::metrics {
 // Parameters: filter orders n1 = 9, n2 = 10 and time-constant ratio
 // kappa = 1.33 as in Watson's Fig. 6.5; tau = 4.94 ms as in ISETCam's
 // implementation of the same model (human/watsonImpulseResponse.m).
-// zeta = 0.9 (strongly transient; ISETCam defaults to 0.5) is our choice: it gives the band-pass shape of photopic de Lange curves: peak near
-// 8.5 Hz, about 0.4 at 2 Hz, 0.1 at 30 Hz, ~0 at 60 Hz.
-// Why this curve: it is a temporal-only model with a closed form (the Kelly
-// 1979 surface needs a spatial frequency we do not know for arbitrary frames),
-// and it is a linear filter, so |H|^2 applies to a power spectrum exactly.
+// zeta = 0.9 (strongly transient; ISETCam defaults to 0.5) is our choice: it gives the band-pass shape of photopic de
+// Lange curves: peak near 8.5 Hz, about 0.4 at 2 Hz, 0.1 at 30 Hz, ~0 at 60 Hz. Why this curve: it is a temporal-only
+// model with a closed form (the Kelly 1979 surface needs a spatial frequency we do not know for arbitrary frames), and
+// it is a linear filter, so |H|^2 applies to a power spectrum exactly.
 double WatsonTemporalGain(double frequency_hz);
 
 // Power of the PSD seen through that filter: sum_k |H(f_k)|^2 psd_k fs/L,

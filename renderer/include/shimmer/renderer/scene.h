@@ -20,8 +20,8 @@ namespace shimmer::scene {
 struct Primitive {
   enum class Type { kSphere = 0, kCapsule = 1, kPlane = 2 };
   Type type = Type::kSphere;
-  glm::dvec3 a{0};  // sphere centre, capsule end
-  glm::dvec3 b{0};  // capsule end
+  glm::dvec3 a{0};    // sphere centre, capsule end
+  glm::dvec3 b{0};    // capsule end
   double radius = 1;  // sphere, capsule; plane: height y
   double bump_slope = 0;
   double bump_frequency = 0;
@@ -75,7 +75,6 @@ std::vector<std::string_view> CameraPathNames();
 std::optional<CameraPath> ParseCameraPath(std::string_view name);
 std::string_view CameraPathName(CameraPath path);
 // The camera of `path` at time `frame / fps` seconds; deterministic.
-shading::CameraDesc CameraAt(CameraPath path, const CameraRig& rig, int frame, double fps, int width,
-                             int height);
+shading::CameraDesc CameraAt(CameraPath path, const CameraRig& rig, int frame, double fps, int width, int height);
 
 }  // namespace shimmer::scene

@@ -131,8 +131,8 @@ inline constexpr int kSceneCapsules = 2;
 inline constexpr int kScenePlanes = 4;
 inline constexpr int kSceneBumps = 8;  // planes with a normal pattern
 inline constexpr int kAllSceneFeatures = kSceneSpheres | kSceneCapsules | kScenePlanes | kSceneBumps;
-PixelTraceCheck TracePixelBothWays(std::span<const glm::vec4> scene_words, int scene_features,
-                                   const CameraDesc& camera, glm::ivec2 px, glm::dvec2 offset);
+PixelTraceCheck TracePixelBothWays(std::span<const glm::vec4> scene_words, int scene_features, const CameraDesc& camera,
+                                   glm::ivec2 px, glm::dvec2 offset);
 
 // --- Variant catalogue ------------------------------------------------------
 

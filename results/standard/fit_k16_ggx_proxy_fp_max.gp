@@ -1,4 +1,4 @@
-set terminal svg size 900,560 dynamic
+set terminal svg size 900,560 dynamic noenhanced
 set output 'fit_k16_ggx_proxy_fp_max.svg'
 set title 'k16-ggx-proxy: training objective J(fp_max)'
 set xlabel 'fp_max'

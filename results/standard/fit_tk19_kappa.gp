@@ -1,4 +1,4 @@
-set terminal svg size 900,560 dynamic
+set terminal svg size 900,560 dynamic noenhanced
 set output 'fit_tk19_kappa.svg'
 set title 'tk19: training objective J(kappa)'
 set xlabel 'kappa'

@@ -1,4 +1,4 @@
-set terminal svg size 900,560 dynamic
+set terminal svg size 900,560 dynamic noenhanced
 set output 'sphere_field___ggx_0_01___dolly___quad_pareto_tv_err.svg'
 set title 'sphere-field / ggx:0.01 / dolly / quad: speed against tv_err'
 set xlabel 'GPU ms per frame'
@@ -7,5 +7,5 @@ set logscale y
 set key top right
 plot 'sphere_field___ggx_0_01___dolly___quad_pareto.dat' index 0 using 1:2 with points pt 7 title 'variants', \
      '' index 0 using ($4 > 0 ? $1 : 1/0):2 with points pt 6 ps 2 title 'Pareto front', \
-     '' index 0 using 1:2:6 with labels offset 0.5,0.5 left font ',8' notitle, \
+     '' index 0 using ($4 > 0 ? $1 : 1/0):2:6 with labels offset 0.8,0.6 left font ',8' notitle, \
      '' index 1 using 1:2 with linespoints dt 2 title 'supersample-N (equal-time baseline)'

@@ -1,4 +1,4 @@
-// `shimmer metrics TEST [REF]`: the temporal metrics of DESIGN.md on any EXR
+// `shimmer metrics TEST [REF]`: the temporal metrics of docs/metrics.md on any EXR
 // sequence, from shimmer's renderer or from anyone else's.
 #include <cmath>
 #include <cstdio>

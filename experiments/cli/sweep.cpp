@@ -156,16 +156,16 @@ void Run(const SweepOptions& o) {
 void AddSweepCommand(CLI::App& app) {
   auto o = std::make_shared<SweepOptions>();
   CLI::App* cmd = app.add_subcommand("sweep", "Sweep one variant parameter, everything else fixed; print a table");
-  cmd->add_option("--scene", o->scene)->capture_default_str();
-  cmd->add_option("--material", o->material)->capture_default_str();
-  cmd->add_option("--camera", o->camera)->capture_default_str();
-  cmd->add_option("--variant", o->variant)->capture_default_str();
+  cmd->add_option("--scene", o->scene, "Built-in scene name or JSON scene file")->capture_default_str();
+  cmd->add_option("--material", o->material, "Material spec NDF:ALPHA[,...]")->capture_default_str();
+  cmd->add_option("--camera", o->camera, "Camera path")->capture_default_str();
+  cmd->add_option("--variant", o->variant, "Filter variant whose parameter is swept")->capture_default_str();
   cmd->add_option("--param", o->param, "name=from:to:steps, e.g. fp_max=0.05:2:12")->required();
   cmd->add_flag("--log", o->log, "Logarithmic steps");
   cmd->add_option("--derivatives", o->derivatives, "quad, quad-coarse or analytic")->capture_default_str();
-  cmd->add_option("--size", o->size, "W H")->expected(2);
-  cmd->add_option("--frames", o->frames)->capture_default_str();
-  cmd->add_option("--fps", o->fps)->capture_default_str();
+  cmd->add_option("--size", o->size, "Width and height in pixels")->expected(2)->capture_default_str();
+  cmd->add_option("--frames", o->frames, "Frames per render (>= 2)")->capture_default_str();
+  cmd->add_option("--fps", o->fps, "Frames per second (camera time step)")->capture_default_str();
   cmd->add_option("--reference-spp", o->reference_spp, "N: N x N samples per pixel")->capture_default_str();
   cmd->add_option("--csv", o->csv, "Also write the table as CSV, with a gnuplot script and SVG beside it");
   cmd->add_option("--work", o->work, "Frame cache")->capture_default_str();

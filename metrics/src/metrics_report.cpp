@@ -1,10 +1,12 @@
 #include "shimmer/metrics/metrics_report.h"
 
 #include <cmath>
+#include <cstdio>
 #include <optional>
 
 #include <tbb/task_group.h>
 
+#include "shimmer/core/host_memory.h"
 #include "shimmer/metrics/metrics_accumulator.h"
 
 namespace shimmer::metrics {
@@ -62,6 +64,21 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
   if (segment_length < 2 || segment_length > frames)
     return R::Failure("--segment " + std::to_string(segment_length) + " must be between 2 and the frame count (" +
                       std::to_string(frames) + ")");
+  // What the pass holds per pixel: three pairs of moments and two difference
+  // maps in double, the spectrum's L-frame ring in float, and two frame pairs
+  // with motion being read and computed. Refused up front, with the numbers,
+  // rather than found by the OOM killer on a huge sequence.
+  const double bytes_per_pixel = 3 * 16 + 2 * 8 + 4.0 * segment_length + 2 * (2 * 4 + 8) + 8;
+  const double needed = bytes_per_pixel * double(width) * double(height);
+  if (const double available = double(AvailableHostMemory()); available > 0 && needed > available) {
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "%s: measuring %dx%d frames needs about %.1f GiB of memory (with --segment %d); %.1f GiB are "
+                  "available",
+                  options.test.string().c_str(), width, height, needed / (1 << 30), segment_length,
+                  available / (1 << 30));
+    return R::Failure(text, ErrorCode::kOutOfMemory);
+  }
 
   // The region M.
   cv::Mat region;

@@ -5,6 +5,7 @@
 #include <atomic>
 
 #include "shimmer/core/atomic_file.h"
+#include "shimmer/core/directories.h"
 
 namespace shimmer {
 
@@ -16,9 +17,7 @@ Result<std::unique_ptr<StagedDirectory>> StagedDirectory::Create(const fs::path&
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
     return R::Failure(out.string() + ": exists and is not a directory");
   // `out` and each missing parent, deepest first: removed again unless committed.
-  std::vector<fs::path> created;
-  for (fs::path p = out; !p.empty() && !fs::exists(p, ec) && p != p.parent_path(); p = p.parent_path())
-    created.push_back(p);
+  std::vector<fs::path> created = MissingDirectories(out);
   auto remove_created = [&created] {
     std::error_code ignored;
     for (const fs::path& p : created) fs::remove(p, ignored);  // only when empty

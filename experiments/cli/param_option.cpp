@@ -1,13 +1,10 @@
 // Helpers every subcommand shares: --param values, flag names in library
 // errors, output locations.
-#include <unistd.h>
-
-#include <cerrno>
 #include <cmath>
 #include <filesystem>
 
 #include "commands.h"
-#include "shimmer/core/atomic_file.h"
+#include "shimmer/core/directories.h"
 
 namespace shimmer::cli {
 
@@ -20,27 +17,15 @@ Error WithFlagNames(const Error& error, const FieldFlags& fields) {
 void RequireParentDirectory(const std::string& option, const std::string& path) {
   const std::filesystem::path parent = std::filesystem::path(path).parent_path();
   std::error_code ec;
-  if (!parent.empty() && !std::filesystem::is_directory(parent, ec))
-    throw UsageError(option + " " + path + ": " + parent.string() +
-                     (std::filesystem::exists(parent, ec) ? " is not a directory" : ": the directory does not exist"));
-  // Also found before the work: a directory the user may not write to is the system's answer, not bad input.
-  const std::string dir = parent.empty() ? "." : parent.string();
-  if (::access(dir.c_str(), W_OK | X_OK) != 0)
-    throw CommandError(
-        Error{ErrorCode::kIo, option + " " + path + ": cannot write into " + dir + " (" + SystemReason(errno) + ")"});
+  if (!parent.empty() && !std::filesystem::exists(parent, ec))
+    throw UsageError(option + " " + path + ": " + parent.string() + ": the directory does not exist");
+  if (Status s = CheckCreatableDirectory(parent); !s) throw CommandError(Prefixed(option + " " + path, s.failure()));
 }
 
 void RequireCreatableDirectory(const std::string& option, const std::string& path) {
-  std::error_code ec;
-  std::filesystem::path existing = path;
-  while (!existing.empty() && !std::filesystem::exists(existing, ec) && existing != existing.parent_path())
-    existing = existing.parent_path();
-  const std::string dir = existing.empty() ? "." : existing.string();
-  if (!std::filesystem::is_directory(dir, ec))
-    throw UsageError(option + " " + path + ": " + dir + " is not a directory");
-  if (::access(dir.c_str(), W_OK | X_OK) != 0)
-    throw CommandError(
-        Error{ErrorCode::kIo, option + " " + path + ": cannot write into " + dir + " (" + SystemReason(errno) + ")"});
+  // Found before the work: a file in the way is bad input, a directory the
+  // user may not write to the system's answer.
+  if (Status s = CheckCreatableDirectory(path); !s) throw CommandError(Prefixed(option + " " + path, s.failure()));
 }
 
 NewDirectories::~NewDirectories() {
@@ -50,19 +35,15 @@ NewDirectories::~NewDirectories() {
 }
 
 void NewDirectories::Create(const std::string& what, const std::filesystem::path& dir) {
-  std::vector<std::filesystem::path> missing;  // deepest first
+  const std::vector<std::filesystem::path> missing = MissingDirectories(dir);  // deepest first
   std::error_code ec;
-  for (std::filesystem::path p = dir; !p.empty() && !std::filesystem::exists(p, ec) && p != p.parent_path();
-       p = p.parent_path())
-    missing.push_back(p);
   std::filesystem::create_directories(dir, ec);
   // Those made before a failure are removed with the rest.
   created_.insert(created_.end(), missing.rbegin(), missing.rend());
   if (!ec) return;
   const std::error_code failure = ec;
-  std::filesystem::path blocking = dir;
-  while (!blocking.empty() && !std::filesystem::exists(blocking, ec) && blocking != blocking.parent_path())
-    blocking = blocking.parent_path();
+  const std::vector<std::filesystem::path> still_missing = MissingDirectories(dir);
+  const std::filesystem::path blocking = still_missing.empty() ? dir : still_missing.back().parent_path();
   if (failure == std::errc::not_a_directory || failure == std::errc::file_exists)
     throw UsageError(what + ": " + blocking.string() + " is not a directory");
   throw CommandError(

@@ -1,8 +1,6 @@
 // Writing what the renderer produces: frames as EXR (on a worker thread while
 // the next frame renders), the preview PNG, and sequence.json, whose status
 // says at every moment what the directory holds.
-#include <unistd.h>
-
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
@@ -18,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "shimmer/core/atomic_file.h"
+#include "shimmer/core/directories.h"
 #include "shimmer/core/exr_output.h"
 #include "shimmer/core/host_memory.h"
 #include "shimmer/renderer/renderer.h"
@@ -90,25 +89,6 @@ std::string FrameName(int i) {
   char name[32];
   std::snprintf(name, sizeof name, "frame_%04d.exr", i);
   return name;
-}
-
-// Where `dir` would be created: its nearest existing ancestor must be a
-// writable directory. Checked before anything is created, so that a render
-// refused for its output leaves no directory behind.
-Status CheckOutputDirectory(const fs::path& dir) {
-  std::error_code ec;
-  fs::path existing = dir;
-  while (!existing.empty() && !fs::exists(existing, ec) && existing != existing.parent_path())
-    existing = existing.parent_path();
-  if (existing.empty()) existing = ".";
-  // A file in the way is the path the user gave; a directory they may not write to is the system's answer.
-  if (!fs::is_directory(existing, ec))
-    return Status::Failure(dir.string() + ": cannot create the output directory (" + existing.string() +
-                           " is not a directory)");
-  if (::access(existing.c_str(), W_OK | X_OK) != 0)
-    return Status::Failure(dir.string() + ": output directory is not writable (" + existing.string() + ")",
-                           ErrorCode::kIo);
-  return Ok();
 }
 
 // At least two frames live at once: one rendering while the last is written.
@@ -209,7 +189,10 @@ Result<SequenceFile> RenderSequence(const RenderSettings& settings, const std::s
                                     const std::function<void(int, int)>& progress) {
   // Everything that can be refused without a device is, before any file exists.
   if (Status s = ValidateSettings(settings); !s) return s.failure();
-  if (Status s = CheckOutputDirectory(out_dir); !s) return s.failure();
+  // Checked before anything is created, so that a render refused for its
+  // output leaves no directory behind.
+  if (Status s = CheckCreatableDirectory(out_dir); !s)
+    return Prefixed(out_dir + ": cannot create the output directory", s.failure());
   if (Status s = CheckHostMemory(settings); !s) return s.failure();
   auto renderer = Renderer::Create(settings);
   if (!renderer) return renderer.failure();

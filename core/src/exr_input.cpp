@@ -3,7 +3,6 @@
 #include <ImfFrameBuffer.h>
 #include <ImfInputPart.h>
 #include <ImfMultiPartInputFile.h>
-#include <ImfThreading.h>
 #include <openexr.h>
 
 #include <algorithm>
@@ -11,10 +10,11 @@
 #include <cstring>
 #include <fstream>
 #include <mutex>
-#include <thread>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+
+#include "imf_threads.h"
 
 namespace shimmer {
 
@@ -83,9 +83,7 @@ struct ChunkPlace {
 // through Imf, which decodes line buffers on its own thread pool.
 Status ReadWithImf(const fs::path& file, int part, const ExrPartInfo& info,
                    const std::vector<ExrPlaneRequest>& requests) {
-  static std::once_flag pool;
-  std::call_once(
-      pool, [] { Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))); });
+  detail::UseImfThreadPool();
   try {
     Imf::MultiPartInputFile in(file.c_str());
     Imf::InputPart input(in, part);

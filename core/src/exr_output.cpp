@@ -5,13 +5,11 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
-#include <ImfThreading.h>
 
 #include <algorithm>
-#include <mutex>
 #include <new>
-#include <thread>
 
+#include "imf_threads.h"
 #include "shimmer/core/atomic_file.h"
 
 namespace shimmer {
@@ -27,9 +25,7 @@ Status WriteExr(const fs::path& file, int width, int height, const std::vector<E
         ErrorCode::kInternal);
   // ZIP-compressing the 16-line blocks is most of a frame's write: OpenEXR
   // compresses them on its thread pool when it has one.
-  static std::once_flag pool;
-  std::call_once(
-      pool, [] { Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))); });
+  detail::UseImfThreadPool();
   const fs::path temporary = TemporaryPathFor(file);
   const std::size_t pixels = std::size_t(width) * std::size_t(height);
   try {

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "shimmer/core/number_text.h"
 #include "shimmer/renderer/shading.h"
 
 namespace shimmer::cli {
@@ -26,15 +27,9 @@ struct NdfOptions {
   bool json = false;
 };
 
-std::string Number(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", v);
-  return text;
-}
-
 void RequireFinite(const std::vector<double>& values, const char* option) {
   for (double v : values)
-    if (!std::isfinite(v)) throw UsageError(std::string(option) + " must be finite, got " + Number(v));
+    if (!std::isfinite(v)) throw UsageError(std::string(option) + " must be finite, got " + NumberText(v));
 }
 
 // The core takes finite inputs only: a value that does not fit the evaluation
@@ -47,9 +42,9 @@ void RequireRepresentable(const std::vector<double>& values, const char* option,
   for (double v : values) {
     const bool fits = in_float ? std::isfinite(float(factor) * float(v)) : std::isfinite(factor * v);
     if (!fits)
-      throw UsageError(std::string(option) + " " + Number(v) + " is out of range for --precision " + precision + " (" +
-                       (factor == 1 ? "" : Number(factor) + " x ") + "|value| must be at most " + Number(largest) +
-                       ")");
+      throw UsageError(std::string(option) + " " + NumberText(v) + " is out of range for --precision " + precision +
+                       " (" + (factor == 1 ? "" : NumberText(factor) + " x ") + "|value| must be at most " +
+                       NumberText(largest) + ")");
   }
 }
 
@@ -89,9 +84,9 @@ void Run(const NdfOptions& o) {
   RequireFinite(o.slope, "--slope");
   RequireFinite(o.footprint, "--footprint");
   for (double a : o.alpha)
-    if (!(a > 0)) throw UsageError("--alpha must be > 0, got " + Number(a));
+    if (!(a > 0)) throw UsageError("--alpha must be > 0, got " + NumberText(a));
   for (double f : o.footprint)
-    if (f < 0) throw UsageError("--footprint half-sides must be >= 0, got " + Number(f));
+    if (f < 0) throw UsageError("--footprint half-sides must be >= 0, got " + NumberText(f));
   RequireRepresentable(o.alpha, "--alpha", o.precision);
   RequireRepresentable(o.slope, "--slope", o.precision);
   RequireRepresentable(o.footprint, "--footprint", o.precision, 2);

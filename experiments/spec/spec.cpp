@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "shimmer/core/json_file.h"
+#include "shimmer/core/number_text.h"
 #include "shimmer/renderer/renderer.h"
 #include "shimmer/renderer/scene.h"
 #include "shimmer/renderer/shading.h"
@@ -69,12 +70,6 @@ int PositiveInt(const json& j, const std::string& key, int max_value) {
   if (!j.is_number_integer() || j.get<long long>() <= 0 || j.get<long long>() > max_value)
     throw SpecError{key, "must be an integer in 1.." + std::to_string(max_value) + ", found " + Quote(j)};
   return j.get<int>();
-}
-
-std::string Short(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", x);
-  return buf;
 }
 
 // A spec's name names its directories (runs/<name>/...): one path component.
@@ -216,8 +211,8 @@ FitConfig ParseFit(const json& f, const Spec& spec) {
   }
   // The search runs on log p, so the bounds must be positive.
   if (!(c.lo > 0 && c.lo < c.hi))
-    throw SpecError{"bounds",
-                    "are empty or not positive: need 0 < lo < hi, found [" + Short(c.lo) + ", " + Short(c.hi) + "]"};
+    throw SpecError{"bounds", "are empty or not positive: need 0 < lo < hi, found [" + NumberText(c.lo) + ", " +
+                                  NumberText(c.hi) + "]"};
   if (Status s = shading::ValidateParam(c.param, c.hi); !s) throw SpecError{"bounds", s.error()};
   if (f.contains("sweep_points")) c.sweep_points = PositiveInt(f["sweep_points"], "sweep_points", kMaxSweepPoints);
   if (c.sweep_points < 2) throw SpecError{"sweep_points", "must be at least 2"};
@@ -331,8 +326,8 @@ Spec ParseSpecObject(const json& j) {
   const double jobs = double(s.scenes.size()) * double(s.materials.size()) * double(s.cameras.size()) * combos *
                       double(s.derivatives.size());
   if (jobs > double(kMaxJobs))
-    throw SpecError{"variants", "the spec expands to " + Short(jobs) + " jobs; at most " + std::to_string(kMaxJobs) +
-                                    " are supported (split it into several specs)"};
+    throw SpecError{"variants", "the spec expands to " + NumberText(jobs) + " jobs; at most " +
+                                    std::to_string(kMaxJobs) + " are supported (split it into several specs)"};
   return s;
 }
 

@@ -108,7 +108,10 @@ Result<std::vector<DeviceDescription>> ListDevices() {
   return out;
 }
 
-Status ValidateSettings(const RenderSettings& s) {
+namespace {
+
+// The checks of ValidateSettings that are not the variant's.
+Status ValidateNumbers(const RenderSettings& s) {
   auto fail = [](std::string message) { return Status::Failure(std::move(message)); };
   if (s.width < 1 || s.height < 1 || s.width > kMaxImageSide || s.height > kMaxImageSide)
     return fail("width and height must be in 1.." + std::to_string(kMaxImageSide) + ", got " + std::to_string(s.width) +
@@ -123,6 +126,13 @@ Status ValidateSettings(const RenderSettings& s) {
     return fail("reference_tolerance must be a finite value > 0");
   if (s.max_rounds < 1 || s.max_rounds > kMaxRounds)
     return fail("max_rounds must be in 1.." + std::to_string(kMaxRounds) + ", got " + std::to_string(s.max_rounds));
+  return Ok();
+}
+
+}  // namespace
+
+Status ValidateSettings(const RenderSettings& s) {
+  if (Status numbers = ValidateNumbers(s); !numbers) return numbers;
   if (auto v = ResolveVariant(s); !v) return v.failure();
   return Ok();
 }
@@ -190,7 +200,7 @@ shading::CameraDesc Renderer::camera(int frame) const {
 
 Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& settings) {
   using R = Result<std::unique_ptr<Renderer>>;
-  if (Status s = ValidateSettings(settings); !s) return s.failure();
+  if (Status s = ValidateNumbers(settings); !s) return s.failure();
   const testing::TestHooks hooks = testing::CurrentTestHooks();
   std::unique_ptr<Renderer> r(new Renderer());
   Impl& im = *r->impl_;

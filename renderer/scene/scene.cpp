@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "shimmer/core/json_file.h"
+#include "shimmer/core/number_text.h"
 
 namespace shimmer::scene {
 
@@ -147,8 +148,9 @@ class FieldReader {
     const auto& v = j_[key];
     const double x = v.is_number() ? v.get<double>() : std::nan("");
     if (!v.is_number() || !std::isfinite(x) || x < lo || x > hi || (open_lo && x == lo)) {
-      std::string range = open_lo && lo == 0 ? "> 0" : (open_lo ? "in (" : "in [") + Short(lo) + ", " + Short(hi) + "]";
-      if (open_lo && lo == 0) range += " and <= " + Short(hi);
+      std::string range =
+          open_lo && lo == 0 ? "> 0" : (open_lo ? "in (" : "in [") + NumberText(lo) + ", " + NumberText(hi) + "]";
+      if (open_lo && lo == 0) range += " and <= " + NumberText(hi);
       return Fail("'" + std::string(key) + "' must be a number " + range);
     }
     *out = x;
@@ -168,11 +170,6 @@ class FieldReader {
   const std::string& error() const { return error_; }
 
  private:
-  static std::string Short(double x) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", x);
-    return buf;
-  }
   const nlohmann::json& j_;
   std::string where_;
   std::string error_;

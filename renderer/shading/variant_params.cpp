@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <string>
 
+#include "shimmer/core/number_text.h"
 #include "shimmer/renderer/shading.h"
 
 namespace shimmer::shading {
@@ -22,12 +23,6 @@ constexpr ParamField kParamFields[] = {
     {"sigma2", &Params<double>::sigma2, 0, 1e4, "screen-space variance of the filtering kernel"},
     {"kappa", &Params<double>::kappa, 0, 1e4, "clamp on the kernel roughness"},
 };
-
-std::string Number(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", x);
-  return buf;
-}
 
 }  // namespace
 
@@ -52,8 +47,8 @@ Status ValidateParam(std::string_view name, double value) {
     return Status::Failure("unknown parameter '" + std::string(name) + "' (the parameters are " + list + ")");
   }
   if (!std::isfinite(value) || value < f->lo || value > f->hi)
-    return Status::Failure("parameter " + std::string(name) + " must be >= " + Number(f->lo) +
-                           " and <= " + Number(f->hi) + ", got " + Number(value));
+    return Status::Failure("parameter " + std::string(name) + " must be >= " + NumberText(f->lo) +
+                           " and <= " + NumberText(f->hi) + ", got " + NumberText(value));
   return Ok();
 }
 

@@ -97,6 +97,22 @@ std::set<std::string> ColumnsOf(sqlite3* db, const std::string& schema) {
   return columns;
 }
 
+// A store's path as an SQLite URI with `query` ("mode=ro", "immutable=1"):
+// the characters URIs reserve are percent-encoded, so any file name works.
+std::string StoreUri(const std::string& path, const char* query) {
+  std::string uri = "file:";
+  for (char c : path) {
+    if (c == '%' || c == '?' || c == '#') {
+      char buf[4];
+      std::snprintf(buf, sizeof buf, "%%%02X", static_cast<unsigned char>(c));
+      uri += buf;
+    } else {
+      uri += c;
+    }
+  }
+  return uri + "?" + query;
+}
+
 bool IsIoError(sqlite3* db) {
   const int code = sqlite3_errcode(db);
   return code == SQLITE_IOERR || code == SQLITE_FULL || code == SQLITE_READONLY || code == SQLITE_CANTOPEN;
@@ -164,21 +180,11 @@ Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, 
     }
     return db;
   };
-  std::string encoded;
-  for (char c : path) {
-    if (c == '%' || c == '?' || c == '#') {
-      char buf[4];
-      std::snprintf(buf, sizeof buf, "%%%02X", static_cast<unsigned char>(c));
-      encoded += buf;
-    } else {
-      encoded += c;
-    }
-  }
   sqlite3* db = nullptr;
   if (mode == Mode::kReadOnly) {
     const int flags = SQLITE_OPEN_READONLY | SQLITE_OPEN_URI;
     const bool live = std::filesystem::exists(path + "-wal", ec);
-    db = open("file:" + encoded + (live ? "?mode=ro" : "?immutable=1"), flags);
+    db = open(StoreUri(path, live ? "mode=ro" : "immutable=1"), flags);
   } else {
     db = open(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
   }
@@ -376,7 +382,7 @@ Result<std::size_t> MergeStores(const std::vector<std::string>& inputs, const st
   for (const std::string& in : inputs) {
     if (!std::filesystem::is_regular_file(in, ec)) return R::Failure(in + ": no such results store");
     if (std::filesystem::equivalent(in, output, ec)) return R::Failure(in + ": is the output store itself");
-    if (Status s = ExecOn(db.get(), "ATTACH DATABASE " + SqlQuote("file:" + in + "?mode=ro") + " AS other;"); !s)
+    if (Status s = ExecOn(db.get(), "ATTACH DATABASE " + SqlQuote(StoreUri(in, "mode=ro")) + " AS other;"); !s)
       return R::Failure(in + ": cannot open the results store (" + s.error() + ")", s.code());
     const std::set<std::string> columns = ColumnsOf(db.get(), "other");
     std::string select;

@@ -84,21 +84,15 @@ Status RunGnuplot(const fs::path& dir, const std::string& script) {
 }
 
 Result<std::optional<std::string>> WritePlot(const fs::path& dir, const std::string& script_name,
-                                             const std::string& output,
-                                             const std::function<std::string(const std::string&)>& script_text) {
+                                             const std::string& output, const std::string& script_text) {
   using R = Result<std::optional<std::string>>;
-  if (Status s = WriteFileAtomic(dir / script_name, script_text(output)); !s) return s.failure();
-  const fs::path partial_output = TemporaryPathFor(dir / output);
-  const fs::path partial_script = TemporaryPathFor(dir / script_name);
-  if (Status s = WriteFileAtomic(partial_script, script_text(partial_output.filename().string())); !s)
-    return s.failure();
-  Status drawn = RunGnuplot(dir, partial_script.filename().string());
+  if (Status s = WriteFileAtomic(dir / script_name, script_text); !s) return s.failure();
+  Status drawn = RunGnuplot(dir, script_name);
   std::error_code ec;
-  fs::remove(partial_script, ec);
-  if (drawn && !fs::exists(partial_output, ec))
+  if (drawn && !fs::exists(dir / output, ec))
     drawn = Status::Failure("gnuplot drew nothing from " + (dir / script_name).string(), ErrorCode::kInternal);
   if (!drawn) {
-    fs::remove(partial_output, ec);
+    fs::remove(dir / output, ec);
     // The data is there without gnuplot, but not on a disk that takes no more.
     if (drawn.code() == ErrorCode::kIo) {
       fs::remove(dir / script_name, ec);
@@ -107,7 +101,6 @@ Result<std::optional<std::string>> WritePlot(const fs::path& dir, const std::str
     }
     return R(std::optional<std::string>(drawn.error()));
   }
-  if (Status s = CommitFile(partial_output, dir / output); !s) return s.failure();
   return R(std::optional<std::string>());
 }
 

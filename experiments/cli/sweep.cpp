@@ -129,17 +129,14 @@ void Run(const SweepOptions& o) {
   std::filesystem::path gp = path, svg = path;
   gp.replace_extension(".gp");
   svg.replace_extension(".svg");
-  auto script = [&](const std::string& output) {
-    std::ostringstream s;
-    s << "set terminal svg size 720,420 dynamic noenhanced\nset output '" << output << "'\n"
-      << "set datafile separator ','\nset key autotitle columnhead\nset xlabel '" << name << "'\n"
-      << (o.log ? "set logscale x\n" : "") << "set ylabel 'tv_ratio, flicker_index'\nset y2label 'energy_bias'\n"
-      << "set y2tics\nset ytics nomirror\n"
-      << "plot '" << path.filename().string() << "' using 1:2 with linespoints, '' using 1:6 with linespoints, "
-      << "'' using 1:4 axes x1y2 with linespoints\n";
-    return s.str();
-  };
-  auto plotted = WritePlot(staged->staging(), gp.filename().string(), svg.filename().string(), script);
+  std::ostringstream s;
+  s << "set terminal svg size 720,420 dynamic noenhanced\nset output '" << svg.filename().string() << "'\n"
+    << "set datafile separator ','\nset key autotitle columnhead\nset xlabel '" << name << "'\n"
+    << (o.log ? "set logscale x\n" : "") << "set ylabel 'tv_ratio, flicker_index'\nset y2label 'energy_bias'\n"
+    << "set y2tics\nset ytics nomirror\n"
+    << "plot '" << path.filename().string() << "' using 1:2 with linespoints, '' using 1:6 with linespoints, "
+    << "'' using 1:4 axes x1y2 with linespoints\n";
+  auto plotted = WritePlot(staged->staging(), gp.filename().string(), svg.filename().string(), s.str());
   if (!plotted) throw CommandError(staged->Unstaged(plotted.failure()));
   const std::optional<std::string> warning = *plotted;
   check(staged->Commit(path.filename().string()));

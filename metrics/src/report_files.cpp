@@ -25,8 +25,8 @@ Status WriteMap(const fs::path& dir, const std::string& name, const cv::Mat& map
   return WriteImage(dir / (name + ".png"), RenderHeatmap(map, region, scaling, range, title));
 }
 
-}  // namespace
-
+// The spectrum CSV and script, and its PNG through gnuplot when present, into
+// WriteReportFiles' staging directory.
 Status WriteSpectrumPlot(const MetricsReport& report, const fs::path& dir, std::vector<std::string>* warnings) {
   const FlickerResult& f = report.flicker;
   std::ostringstream csv;
@@ -37,38 +37,37 @@ Status WriteSpectrumPlot(const MetricsReport& report, const fs::path& dir, std::
   if (Status s = WriteFileAtomic(dir / "spectrum.csv", csv.str()); !s) return s;
 
   // The script sits beside the data so the plot can be restyled and rerun by hand.
-  auto script = [&](const std::string& output) {
-    std::ostringstream gp;
-    gp << "# Flicker spectrum written by `shimmer metrics`; run: gnuplot spectrum.gp\n"
-       << "set terminal pngcairo size 800,480 font 'sans,10' noenhanced\n"
-       << "set output '" << output << "'\n"
-       << "set datafile separator ','\n"
-       << "set title 'Flicker spectrum: Welch PSD of " << (f.signal == "error" ? "E = T - R" : "T") << " (layer "
-       << report.layer << ", " << report.pixels - report.nan_pixels << " px, L = " << f.segment_length << ", "
-       << f.segments << " segments)' noenhanced\n"
-       << "set xlabel 'frequency (Hz)'\n"
-       << "set ylabel 'PSD (Y^2 / Hz)'\n"
-       << "set y2label 'Watson 1986 gain |H|^2'\n"
-       << "set logscale y\n"
-       << "set format y '%.0e'\n"
-       << "set y2range [0:1.05]\n"
-       << "set y2tics\n"
-       << "set ytics nomirror\n"
-       << "set grid\n"
-       << "set key top right\n"
-       << "set arrow from 2, graph 0 to 2, graph 1 nohead dt 2 lc rgb '#888888'\n"
-       << "set arrow from 8, graph 0 to 8, graph 1 nohead dt 2 lc rgb '#888888'\n"
-       << "plot 'spectrum.csv' skip 1 using 1:($2 > 0 ? $2 : NaN) with linespoints lw 2 pt 7 ps 0.6 lc rgb '#c0392b' "
-          "title 'PSD', \\\n"
-       << "     '' skip 1 using 1:($3*$3) axes x1y2 with lines dt 3 lw 1.5 lc rgb '#2c3e50' title 'eye weight "
-          "(flicker_index)'\n";
-    return gp.str();
-  };
-  auto plotted = WritePlot(dir, "spectrum.gp", "spectrum.png", script);
+  std::ostringstream gp;
+  gp << "# Flicker spectrum written by `shimmer metrics`; run: gnuplot spectrum.gp\n"
+     << "set terminal pngcairo size 800,480 font 'sans,10' noenhanced\n"
+     << "set output 'spectrum.png'\n"
+     << "set datafile separator ','\n"
+     << "set title 'Flicker spectrum: Welch PSD of " << (f.signal == "error" ? "E = T - R" : "T") << " (layer "
+     << report.layer << ", " << report.pixels - report.nan_pixels << " px, L = " << f.segment_length << ", "
+     << f.segments << " segments)' noenhanced\n"
+     << "set xlabel 'frequency (Hz)'\n"
+     << "set ylabel 'PSD (Y^2 / Hz)'\n"
+     << "set y2label 'Watson 1986 gain |H|^2'\n"
+     << "set logscale y\n"
+     << "set format y '%.0e'\n"
+     << "set y2range [0:1.05]\n"
+     << "set y2tics\n"
+     << "set ytics nomirror\n"
+     << "set grid\n"
+     << "set key top right\n"
+     << "set arrow from 2, graph 0 to 2, graph 1 nohead dt 2 lc rgb '#888888'\n"
+     << "set arrow from 8, graph 0 to 8, graph 1 nohead dt 2 lc rgb '#888888'\n"
+     << "plot 'spectrum.csv' skip 1 using 1:($2 > 0 ? $2 : NaN) with linespoints lw 2 pt 7 ps 0.6 lc rgb '#c0392b' "
+        "title 'PSD', \\\n"
+     << "     '' skip 1 using 1:($3*$3) axes x1y2 with lines dt 3 lw 1.5 lc rgb '#2c3e50' title 'eye weight "
+        "(flicker_index)'\n";
+  auto plotted = WritePlot(dir, "spectrum.gp", "spectrum.png", gp.str());
   if (!plotted) return plotted.failure();
   if (*plotted && warnings) warnings->push_back(**plotted);
   return Ok();
 }
+
+}  // namespace
 
 Status WriteReportFiles(const MetricsReport& report, const fs::path& out, std::vector<std::string>* warnings) {
   // Every file into a staging directory, then renamed together, metrics.json

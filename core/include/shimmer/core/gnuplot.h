@@ -3,7 +3,6 @@
 #pragma once
 
 #include <filesystem>
-#include <functional>
 #include <optional>
 #include <string>
 
@@ -19,13 +18,13 @@ bool GnuplotAvailable();
 // error to every caller, it names a plot that was cut short (a full disk).
 Status RunGnuplot(const std::filesystem::path& dir, const std::string& script);
 
-// Writes `dir/<script_name>` = script_text("<output>") and draws `dir/<output>`
-// from it without a half-drawn file ever under that name: gnuplot runs on a
-// copy of the script aimed at a temporary name, which is then renamed.
-// Returns a warning when the plot could not be drawn; an error when the
-// script or the plot could not be written (then neither is left).
+// Writes `dir/<script_name>` and draws `output` (the script's `set output`)
+// from it. Meant for a StagedDirectory's staging directory, which makes the
+// plot appear together with its data or not at all. Returns a warning when
+// the plot could not be drawn (no gnuplot, a script gnuplot rejects; no plot
+// is left); an error when the script or the plot could not be written (then
+// neither is left).
 Result<std::optional<std::string>> WritePlot(const std::filesystem::path& dir, const std::string& script_name,
-                                             const std::string& output,
-                                             const std::function<std::string(const std::string&)>& script_text);
+                                             const std::string& output, const std::string& script_text);
 
 }  // namespace shimmer

@@ -21,8 +21,4 @@ namespace shimmer::metrics {
 Status WriteReportFiles(const MetricsReport& report, const std::filesystem::path& dir,
                         std::vector<std::string>* warnings);
 
-// Just the spectrum CSV + script (+ PNG through gnuplot when present).
-Status WriteSpectrumPlot(const MetricsReport& report, const std::filesystem::path& dir,
-                         std::vector<std::string>* warnings);
-
 }  // namespace shimmer::metrics

@@ -3,6 +3,7 @@
 // never leaves half a row.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -17,6 +18,41 @@ struct sqlite3;
 
 namespace shimmer::experiments {
 
+// A shot's reference shown converged, not assumed (DESIGN.md, Trust): `none`
+// measured against the shot's reference and against one with twice the
+// samples per axis (adaptive references: half the tolerance). One per
+// reference id, in table `shots`.
+struct ShotCheck {
+  std::string reference_id;
+  std::string scene, material, camera;
+  int spp = 0, check_spp = 0;               // N and 2N per axis (per replicate)
+  double tolerance = 0, check_tolerance = 0;  // adaptive references
+  // Metrics of `none` against the reference at N (as the jobs are measured) and at 2N.
+  double tv_ref = 0, tv_ref_check = 0;
+  double energy_bias = 0, energy_bias_check = 0;
+  double tv_err = 0, tv_err_check = 0;
+  // |tv_ref_check / tv_ref - 1|, |energy_bias_check - energy_bias|, |tv_err_check / tv_err - 1|.
+  double d_tv_ref = 0, d_energy_bias = 0, d_tv_err = 0;
+  double tol_energy = 0.02, tol_tv = 0.10;  // the spec's reference.converge
+  long long unconverged_pixels = 0;  // pixel-frames of the reference left above its tolerance at max_rounds
+  bool converged = false;            // every change within its tolerance
+};
+
+// Cost as a benchmark (DESIGN.md, Trust): dedicated timing renders at the
+// benchmark size, every variant of a (scene, derivative source) interleaved
+// in one batch after warm-up. One per (scene, derivatives, variant, params,
+// size, device), in table `benchmarks`.
+struct BenchmarkCost {
+  std::string scene, derivatives, variant;
+  std::map<std::string, double> params;
+  std::string material, camera;  // what the batch rendered (the spec's first material and camera)
+  int width = 0, height = 0, repetitions = 0;
+  double median_ms = 0, min_ms = 0, max_ms = 0;  // GPU ms per frame over the repetitions
+  double none_median_ms = 0;                     // `none` in the same batch
+  double ratio_to_none = 0;                      // median_ms / none_median_ms
+  std::string device, driver;
+};
+
 struct JobResult {
   std::string id;
   std::string reference_id;
@@ -28,6 +64,10 @@ struct JobResult {
   std::string core_version;
   std::string device;  // the Vulkan device that rendered it, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
   std::string driver;  // its driver and version, so that merged shards stay distinguishable
+  // Joined when read from a store: the shot's convergence check (by
+  // reference_id) and the benchmark cost of this variant on this device.
+  std::optional<ShotCheck> shot;
+  std::optional<BenchmarkCost> cost;
 };
 
 // A metric of the metrics library's JSON (e.g. "tv_err"), NaN when absent

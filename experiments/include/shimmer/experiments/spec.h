@@ -18,9 +18,25 @@ struct VariantSweep {
   std::map<std::string, std::vector<double>> params;
 };
 
+// How much a shot's metrics of `none` may move when the reference doubles
+// its samples per axis before the shot is called unconverged.
+struct ConvergenceTolerance {
+  double energy = 0.02;  // absolute change of energy_bias
+  double tv = 0.10;      // relative change of tv_ref and of tv_err
+};
+
 struct ReferenceQuality {
-  int spp = 8;           // N x N stratified samples per pixel
+  int spp = 8;           // N x N stratified samples per pixel and replicate
   double tolerance = 0;  // > 0: adaptive to this relative standard error instead
+  int replicates = 4;    // independent N x N patterns per pixel: the standard error comes from their spread
+  ConvergenceTolerance converge;  // not part of job ids: it changes verdicts, not numbers
+};
+
+// Dedicated timing renders (spec key "benchmark"; false turns them off).
+struct BenchmarkOptions {
+  bool enabled = true;
+  int width = 512, height = 512;
+  int repetitions = 5;
 };
 
 struct MetricOptions {
@@ -68,6 +84,7 @@ struct Spec {
   double fps = 30;
   ReferenceQuality reference;
   MetricOptions metrics;
+  BenchmarkOptions benchmark;
   std::vector<FitConfig> fits;  // the `fit` section: one object or a list
 };
 

@@ -21,6 +21,8 @@ struct RunCliOptions {
   bool keep_frames = false;
   int jobs = 1;
   std::string device;
+  bool no_benchmark = false;
+  bool no_check = false;
 };
 
 std::string Duration(double s) {
@@ -54,6 +56,8 @@ void Run(const RunCliOptions& o) {
   ro.keep_frames = o.keep_frames;
   ro.jobs = o.jobs;
   ro.device = o.device;
+  ro.check_shots = !o.no_check;
+  if (!o.no_benchmark) ro.benchmark = spec.benchmark;
   const bool tty = isatty(fileno(stderr));
   ro.progress = [tty](const experiments::RunProgress& p) { PrintProgress(p, tty); };
   const auto jobs = experiments::ExpandJobs(spec);
@@ -62,6 +66,15 @@ void Run(const RunCliOptions& o) {
   dirs.Keep();
   std::printf("%s: %d jobs in shard %s (%d computed, %d already done) -> %s\n", spec.name.c_str(), s.total,
               o.shard.c_str(), s.computed, s.skipped, ro.db_path.c_str());
+  if (s.shots_checked)
+    std::printf("%s: %d shot references checked at twice the samples per axis, %d unconverged\n", spec.name.c_str(),
+                s.shots_checked, s.shots_unconverged);
+  if (s.benchmarks) std::printf("%s: %d benchmark batches timed\n", spec.name.c_str(), s.benchmarks);
+  if (s.shots_unconverged)
+    std::fprintf(stderr,
+                 "shimmer: warning: %d shots have a reference that moved beyond reference.converge at twice the "
+                 "samples; the report marks them unconverged and leaves them out of its recommendations\n",
+                 s.shots_unconverged);
 }
 
 }  // namespace
@@ -88,6 +101,9 @@ void AddRunCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--keep-frames", o->keep_frames, "Keep rendered frames after measuring");
   cmd->add_option("--device", o->device, "Vulkan device name substring");
+  cmd->add_flag("--no-benchmark", o->no_benchmark, "Skip the timing renders of the spec's benchmark section");
+  cmd->add_flag("--no-check", o->no_check,
+                "Skip the convergence check of each shot's reference (twice the samples per axis)");
   cmd->callback([o] { Run(*o); });
 }
 

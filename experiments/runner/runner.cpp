@@ -1,15 +1,18 @@
 #include "shimmer/experiments/runner.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <set>
 #include <thread>
 
 #include <nlohmann/json.hpp>
 
+#include "runner_parts.h"
 #include "shimmer/core/sequence_file.h"
 
 #include "shimmer/metrics/metrics_report.h"
@@ -19,8 +22,6 @@
 namespace shimmer::experiments {
 
 namespace fs = std::filesystem;
-
-namespace {
 
 // Renders into dir.partial and renames: a directory under its final name is
 // always a complete sequence. Returns its sequence.json.
@@ -46,11 +47,36 @@ Result<SequenceFile> RenderInto(const render::RenderSettings& settings, const fs
   return rendered;
 }
 
-fs::path ReferenceDir(const Job& job, const RunOptions& options) {
+fs::path ReferenceDirectory(const Job& job, const RunOptions& options) {
   return fs::path(options.work_dir) / ("ref-" + ReferenceId(job));
 }
 
-}  // namespace
+Result<render::RenderSettings> ReferenceSettings(const Job& job, const RunOptions& options) {
+  auto reference = JobSettings(job, options);
+  if (!reference) return reference.failure();
+  reference->variant = "none";
+  reference->param_overrides.clear();
+  reference->reference_spp = job.reference.spp;
+  reference->reference_tolerance = job.reference.tolerance;
+  reference->reference_replicates = job.reference.replicates;
+  return reference;
+}
+
+Result<metrics::MetricsReport> MeasureAgainst(const Job& job, const fs::path& test, const fs::path& reference,
+                                              const fs::path& mask) {
+  metrics::MetricsOptions mo;
+  mo.test = test;
+  mo.reference = reference;
+  if (!mask.empty()) {
+    mo.mask_file = mask;
+  } else {
+    mo.highlight_mask = job.metrics.highlight_mask;
+    mo.highlight.threshold = job.metrics.highlight_threshold;
+    mo.highlight.empty_falls_back_to_frame = true;
+  }
+  mo.segment_length = job.metrics.segment;
+  return metrics::ComputeMetrics(mo);
+}
 
 Result<render::RenderSettings> JobSettings(const Job& job, const RunOptions& options) {
   using R = Result<render::RenderSettings>;
@@ -81,13 +107,9 @@ Result<render::RenderSettings> JobSettings(const Job& job, const RunOptions& opt
 }
 
 Status EnsureReference(const Job& job, const RunOptions& options) {
-  auto reference = JobSettings(job, options);
+  auto reference = ReferenceSettings(job, options);
   if (!reference) return reference.failure();
-  reference->variant = "none";
-  reference->param_overrides.clear();
-  reference->reference_spp = job.reference.spp;
-  reference->reference_tolerance = job.reference.tolerance;
-  auto rendered = RenderInto(*reference, ReferenceDir(job, options));
+  auto rendered = RenderInto(*reference, ReferenceDirectory(job, options));
   if (!rendered) return Prefixed("reference", rendered.failure());
   return Ok();
 }
@@ -97,20 +119,11 @@ Result<JobResult> MeasureJob(const Job& job, const RunOptions& options) {
   auto test = JobSettings(job, options);
   if (!test) return test.failure();
   const std::string id = JobId(job), ref_id = ReferenceId(job);
-  const fs::path ref_dir = ReferenceDir(job, options);
   const fs::path job_dir = fs::path(options.work_dir) / ("job-" + id);
   if (Status s = EnsureReference(job, options); !s) return s.failure();
   auto rendered = RenderInto(*test, job_dir);
   if (!rendered) return rendered.failure();
-
-  metrics::MetricsOptions mo;
-  mo.test = job_dir;
-  mo.reference = ref_dir;
-  mo.highlight_mask = job.metrics.highlight_mask;
-  mo.highlight.threshold = job.metrics.highlight_threshold;
-  mo.highlight.empty_falls_back_to_frame = true;
-  mo.segment_length = job.metrics.segment;
-  auto report = metrics::ComputeMetrics(mo);
+  auto report = MeasureAgainst(job, job_dir, ReferenceDirectory(job, options), {});
   if (!report) return report.failure();
   JobResult r;
   r.id = id;
@@ -129,6 +142,85 @@ Result<JobResult> MeasureJob(const Job& job, const RunOptions& options) {
   }
   return r;
 }
+
+namespace {
+
+// One check per shot (reference id) of these jobs that the store lacks, on
+// `options.jobs` workers.
+Status CheckShots(const std::vector<Job>& jobs, const RunOptions& options, ResultStore& store, RunProgress* progress,
+                  RunSummary* summary) {
+  std::vector<Job> shots;
+  std::set<std::string> seen;
+  for (const Job& job : jobs) {
+    if (!seen.insert(ReferenceId(job)).second) continue;
+    auto has = store.HasShot(ReferenceId(job));
+    if (!has) return has.failure();
+    if (!*has) shots.push_back(job);
+  }
+  std::mutex mutex;
+  std::atomic<std::size_t> next{0};
+  std::optional<Error> error;
+  auto worker = [&] {
+    for (std::size_t k = next++; k < shots.size(); k = next++) {
+      const Job& job = shots[k];
+      const std::string what = job.scene + " " + job.material + " " + job.camera;
+      auto check = CheckShot(job, options);
+      std::lock_guard<std::mutex> lock(mutex);
+      if (error) return;
+      if (!check) {
+        error = Prefixed("reference check of " + what, check.failure());
+        return;
+      }
+      if (Status s = store.InsertShot(*check); !s) {
+        error = s.failure();
+        return;
+      }
+      ++summary->shots_checked;
+      if (!check->converged) ++summary->shots_unconverged;
+      progress->current = "reference check " + std::to_string(summary->shots_checked) + "/" +
+                          std::to_string(shots.size()) + ": " + what + (check->converged ? "" : " (unconverged)");
+      if (options.progress) options.progress(*progress);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int i = 1; i < std::max(1, options.jobs); ++i) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
+  if (error) return Status(*error);
+  return Ok();
+}
+
+// Times one batch unless the store has every variant of it on this device.
+Status EnsureBenchmark(const BenchmarkBatch& batch, const BenchmarkOptions& bench, const RunOptions& options,
+                       ResultStore& store, RunProgress* progress, RunSummary* summary) {
+  auto existing = store.Benchmarks();
+  if (!existing) return existing.failure();
+  auto devices = render::ListDevices();
+  std::string device;
+  if (devices)
+    for (const auto& d : *devices)
+      if (d.name.find(options.device) != std::string::npos) {
+        device = d.name;
+        break;
+      }
+  const bool done = std::all_of(batch.jobs.begin(), batch.jobs.end(), [&](const Job& job) {
+    return std::any_of(existing->begin(), existing->end(), [&](const BenchmarkCost& c) {
+      return c.scene == batch.scene && c.derivatives == batch.derivatives && c.variant == job.variant &&
+             c.params == job.params && c.width == bench.width && c.height == bench.height && c.device == device;
+    });
+  });
+  if (done) return Ok();
+  progress->current = "benchmark " + batch.scene + " " + batch.derivatives + " (" + std::to_string(batch.jobs.size()) +
+                      " variants at " + std::to_string(bench.width) + "x" + std::to_string(bench.height) + ")";
+  if (options.progress) options.progress(*progress);
+  auto costs = RunBenchmark(batch, bench, options);
+  if (!costs) return costs.failure();
+  if (Status s = store.InsertBenchmarks(*costs); !s) return s;
+  ++summary->benchmarks;
+  return Ok();
+}
+
+}  // namespace
 
 RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) {
   RunSummary summary;
@@ -235,6 +327,23 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
       (*lock)->Discard();
     }
     return summary;
+  }
+
+  if (options.check_shots) {
+    if (Status s = CheckShots(jobs, options, *store, &progress, &summary); !s) {
+      summary.error = s.failure();
+      return summary;
+    }
+  }
+  if (options.benchmark && options.benchmark->enabled) {
+    // Batches are dealt to shards by index, so each is timed once, whole.
+    const std::vector<BenchmarkBatch> batches = BenchmarkBatches(all_jobs);
+    for (std::size_t b = options.shard_index; b < batches.size(); b += options.shard_count) {
+      if (Status s = EnsureBenchmark(batches[b], *options.benchmark, options, *store, &progress, &summary); !s) {
+        summary.error = s.failure();
+        return summary;
+      }
+    }
   }
 
   if (!options.keep_frames) {

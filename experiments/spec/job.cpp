@@ -21,6 +21,7 @@ json Job::ToJson() const {
           {"fps", fps},
           {"reference_spp", reference.spp},
           {"reference_tolerance", reference.tolerance},
+          {"reference_replicates", reference.replicates},
           {"highlight_mask", metrics.highlight_mask},
           {"highlight_threshold", metrics.highlight_threshold},
           {"segment", metrics.segment}};
@@ -40,6 +41,8 @@ Job Job::FromJson(const json& j) {
   job.fps = j.at("fps");
   job.reference.spp = j.at("reference_spp");
   job.reference.tolerance = j.at("reference_tolerance");
+  // Rows from before replicates existed were measured against one N x N pattern.
+  job.reference.replicates = j.value("reference_replicates", 1);
   job.metrics.highlight_mask = j.at("highlight_mask");
   job.metrics.highlight_threshold = j.at("highlight_threshold");
   job.metrics.segment = j.at("segment");
@@ -155,6 +158,7 @@ std::string ReferenceId(const Job& job) {
             {"fps", job.fps},
             {"reference_spp", job.reference.spp},
             {"reference_tolerance", job.reference.tolerance},
+            {"reference_replicates", job.reference.replicates},
             {"core", ShadingCoreVersion()}};
   return Fnv1a64Hex(j.dump());
 }

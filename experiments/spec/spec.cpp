@@ -243,7 +243,7 @@ Spec ParseSpecObject(const json& j) {
   if (!j.is_object()) throw SpecError{"", "a spec is a JSON object"};
   RejectUnknownKeys(j,
                     {"name", "scenes", "materials", "cameras", "variants", "derivatives", "size", "frames", "fps",
-                     "reference", "metrics", "fit"},
+                     "reference", "metrics", "benchmark", "fit"},
                     "");
   Spec s;
   for (const char* required : {"name", "scenes", "materials", "cameras", "variants"})
@@ -285,11 +285,45 @@ Spec ParseSpecObject(const json& j) {
   if (j.contains("reference")) {
     const json& r = j["reference"];
     if (!r.is_object()) throw SpecError{"reference", "must be {\"spp\": N} or {\"tolerance\": T}"};
-    RejectUnknownKeys(r, {"spp", "tolerance"}, "reference");
+    RejectUnknownKeys(r, {"spp", "tolerance", "replicates", "converge"}, "reference");
     if (r.contains("spp")) s.reference.spp = PositiveInt(r["spp"], "spp", render::kMaxReferenceSpp);
     if (r.contains("tolerance")) {
       s.reference.tolerance = Number(r["tolerance"], "tolerance");
       if (s.reference.tolerance <= 0 || s.reference.tolerance >= 1) throw SpecError{"tolerance", "must be in (0, 1)"};
+    }
+    if (r.contains("replicates")) {
+      s.reference.replicates = PositiveInt(r["replicates"], "replicates", render::kMaxRounds);
+      if (s.reference.replicates < 2)
+        throw SpecError{"replicates", "must be at least 2 (the spread of replicates is the standard error)"};
+    }
+    if (r.contains("converge")) {
+      const json& c = r["converge"];
+      if (!c.is_object()) throw SpecError{"converge", "must be {\"energy\": E, \"tv\": T}"};
+      RejectUnknownKeys(c, {"energy", "tv"}, "reference.converge");
+      if (c.contains("energy")) s.reference.converge.energy = Number(c["energy"], "converge.energy");
+      if (c.contains("tv")) s.reference.converge.tv = Number(c["tv"], "converge.tv");
+      if (s.reference.converge.energy <= 0 || s.reference.converge.tv <= 0)
+        throw SpecError{"converge", "tolerances must be > 0"};
+    }
+  }
+  if (j.contains("benchmark")) {
+    const json& b = j["benchmark"];
+    if (b.is_boolean()) {
+      s.benchmark.enabled = b.get<bool>();
+    } else if (b.is_object()) {
+      RejectUnknownKeys(b, {"size", "repetitions"}, "benchmark");
+      if (b.contains("size")) {
+        const json& size = b["size"];
+        if (!size.is_array() || size.size() != 2) throw SpecError{"benchmark.size", "must be [width, height]"};
+        s.benchmark.width = PositiveInt(size[0], "benchmark.size", render::kMaxImageSide);
+        s.benchmark.height = PositiveInt(size[1], "benchmark.size", render::kMaxImageSide);
+        if (s.benchmark.width % 2 || s.benchmark.height % 2)
+          throw SpecError{"benchmark.size", "width and height must be even (2x2 quads)"};
+      }
+      if (b.contains("repetitions"))
+        s.benchmark.repetitions = PositiveInt(b["repetitions"], "benchmark.repetitions", 1000);
+    } else {
+      throw SpecError{"benchmark", "must be true, false or {\"size\": [w, h], \"repetitions\": R}"};
     }
   }
   if (j.contains("metrics")) {

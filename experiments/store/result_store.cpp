@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 
 #include "shimmer/core/atomic_file.h"
@@ -34,6 +35,21 @@ CREATE TABLE IF NOT EXISTS jobs (
   revision TEXT, core_version TEXT,
   finished_at TEXT DEFAULT (datetime('now')),
   device TEXT, driver TEXT
+);
+CREATE TABLE IF NOT EXISTS shots (
+  reference_id TEXT PRIMARY KEY,
+  scene TEXT NOT NULL, material TEXT NOT NULL, camera TEXT NOT NULL,
+  converged INTEGER NOT NULL,
+  check_json TEXT NOT NULL,
+  finished_at TEXT DEFAULT (datetime('now'))
+);
+CREATE TABLE IF NOT EXISTS benchmarks (
+  scene TEXT NOT NULL, derivatives TEXT NOT NULL, variant TEXT NOT NULL, params TEXT NOT NULL,
+  width INTEGER NOT NULL, height INTEGER NOT NULL, device TEXT NOT NULL,
+  median_ms REAL, ratio_to_none REAL,
+  cost_json TEXT NOT NULL,
+  finished_at TEXT DEFAULT (datetime('now')),
+  PRIMARY KEY (scene, derivatives, variant, params, width, height, device)
 );
 CREATE TABLE IF NOT EXISTS fits (
   variant TEXT NOT NULL, param TEXT NOT NULL, material TEXT NOT NULL,
@@ -95,6 +111,14 @@ std::set<std::string> ColumnsOf(sqlite3* db, const std::string& schema) {
   while (sqlite3_step(s.stmt) == SQLITE_ROW)
     columns.insert(reinterpret_cast<const char*>(sqlite3_column_text(s.stmt, 1)));
   return columns;
+}
+
+bool HasTable(sqlite3* db, const char* schema, const char* name) {
+  Statement s;
+  const std::string sql = std::string("SELECT 1 FROM ") + schema + ".sqlite_master WHERE type = 'table' AND name = ?";
+  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &s.stmt, nullptr) != SQLITE_OK) return false;
+  sqlite3_bind_text(s.stmt, 1, name, -1, SQLITE_STATIC);
+  return sqlite3_step(s.stmt) == SQLITE_ROW;
 }
 
 // A store's path as an SQLite URI with `query` ("mode=ro", "immutable=1"):
@@ -196,6 +220,7 @@ Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, 
     if (!columns.count("id") || !columns.count("job"))
       return R::Failure(path + ": not a shimmer results store (it has no jobs table)");
     store->has_device_columns_ = columns.count("device") > 0;
+    store->has_verdict_tables_ = HasTable(db, "main", "shots") && HasTable(db, "main", "benchmarks");
     return store;
   }
   // WAL: a reader (report) never blocks the runner, and a crash mid-write rolls back cleanly.
@@ -328,7 +353,119 @@ Result<std::vector<JobResult>> ResultStore::Select(const std::string& where, con
     rows.push_back(std::move(r));
   }
   if (rc != SQLITE_DONE) return Failure("cannot read the jobs");
+  if (!has_verdict_tables_) return rows;
+  auto shots = Shots();
+  if (!shots) return shots.failure();
+  auto costs = Benchmarks();
+  if (!costs) return costs.failure();
+  std::map<std::string, const ShotCheck*> shot_of;
+  for (const ShotCheck& shot : *shots) shot_of[shot.reference_id] = &shot;
+  for (JobResult& r : rows) {
+    if (auto it = shot_of.find(r.reference_id); it != shot_of.end()) r.shot = *it->second;
+    // The cost measured on the row's own device when there is one.
+    for (const BenchmarkCost& c : *costs)
+      if (c.scene == r.job.scene && c.derivatives == r.job.derivatives && c.variant == r.job.variant &&
+          c.params == r.job.params && (!r.cost || (c.device == r.device && r.cost->device != r.device)))
+        r.cost = c;
+  }
   return rows;
+}
+
+Result<bool> ResultStore::HasShot(const std::string& reference_id) {
+  Statement s;
+  if (sqlite3_prepare_v2(db_, "SELECT 1 FROM shots WHERE reference_id = ?", -1, &s.stmt, nullptr) != SQLITE_OK)
+    return Failure("cannot read the shots");
+  sqlite3_bind_text(s.stmt, 1, reference_id.c_str(), -1, SQLITE_TRANSIENT);
+  const int rc = sqlite3_step(s.stmt);
+  if (rc != SQLITE_ROW && rc != SQLITE_DONE) return Failure("cannot read the shots");
+  return rc == SQLITE_ROW;
+}
+
+Status ResultStore::InsertShot(const ShotCheck& shot) {
+  Statement s;
+  if (sqlite3_prepare_v2(db_,
+                         "INSERT OR REPLACE INTO shots (reference_id, scene, material, camera, converged, check_json) "
+                         "VALUES (?,?,?,?,?,?)",
+                         -1, &s.stmt, nullptr) != SQLITE_OK)
+    return Failure("cannot write a shot");
+  const std::string text = nlohmann::json(shot).dump();
+  sqlite3_bind_text(s.stmt, 1, shot.reference_id.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_text(s.stmt, 2, shot.scene.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_text(s.stmt, 3, shot.material.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_text(s.stmt, 4, shot.camera.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_int(s.stmt, 5, shot.converged ? 1 : 0);
+  sqlite3_bind_text(s.stmt, 6, text.c_str(), -1, SQLITE_TRANSIENT);
+  if (sqlite3_step(s.stmt) != SQLITE_DONE) return Failure("cannot write shot " + shot.reference_id);
+  return Ok();
+}
+
+Result<std::vector<ShotCheck>> ResultStore::Shots() {
+  using R = Result<std::vector<ShotCheck>>;
+  std::vector<ShotCheck> out;
+  Statement s;
+  if (sqlite3_prepare_v2(db_, "SELECT check_json FROM shots ORDER BY reference_id", -1, &s.stmt, nullptr) != SQLITE_OK)
+    return out;  // a store from before convergence checks
+  while (sqlite3_step(s.stmt) == SQLITE_ROW) {
+    auto j = nlohmann::json::parse(reinterpret_cast<const char*>(sqlite3_column_text(s.stmt, 0)), nullptr, false);
+    if (j.is_discarded() || !j.is_object()) return R::Failure(path_ + ": a shot row is damaged");
+    try {
+      out.push_back(j.get<ShotCheck>());
+    } catch (const nlohmann::json::exception&) {
+      return R::Failure(path_ + ": a shot row is damaged");
+    }
+  }
+  return out;
+}
+
+Status ResultStore::InsertBenchmarks(const std::vector<BenchmarkCost>& costs) {
+  if (Status s = Exec("BEGIN IMMEDIATE;"); !s) return s;
+  for (const BenchmarkCost& c : costs) {
+    Statement s;
+    if (sqlite3_prepare_v2(db_,
+                           "INSERT OR REPLACE INTO benchmarks (scene, derivatives, variant, params, width, height, "
+                           "device, median_ms, ratio_to_none, cost_json) VALUES (?,?,?,?,?,?,?,?,?,?)",
+                           -1, &s.stmt, nullptr) != SQLITE_OK) {
+      Error e = Failure("cannot write a benchmark");
+      (void)Exec("ROLLBACK;");
+      return e;
+    }
+    const std::string params = nlohmann::json(c.params).dump(), text = nlohmann::json(c).dump();
+    sqlite3_bind_text(s.stmt, 1, c.scene.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.stmt, 2, c.derivatives.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.stmt, 3, c.variant.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.stmt, 4, params.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_int(s.stmt, 5, c.width);
+    sqlite3_bind_int(s.stmt, 6, c.height);
+    sqlite3_bind_text(s.stmt, 7, c.device.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_double(s.stmt, 8, c.median_ms);
+    sqlite3_bind_double(s.stmt, 9, c.ratio_to_none);
+    sqlite3_bind_text(s.stmt, 10, text.c_str(), -1, SQLITE_TRANSIENT);
+    if (sqlite3_step(s.stmt) != SQLITE_DONE) {
+      Error e = Failure("cannot write a benchmark");
+      (void)Exec("ROLLBACK;");
+      return e;
+    }
+  }
+  return Exec("COMMIT;");
+}
+
+Result<std::vector<BenchmarkCost>> ResultStore::Benchmarks() {
+  using R = Result<std::vector<BenchmarkCost>>;
+  std::vector<BenchmarkCost> out;
+  Statement s;
+  if (sqlite3_prepare_v2(db_, "SELECT cost_json FROM benchmarks ORDER BY scene, derivatives, variant, params, device",
+                         -1, &s.stmt, nullptr) != SQLITE_OK)
+    return out;  // a store from before benchmarks
+  while (sqlite3_step(s.stmt) == SQLITE_ROW) {
+    auto j = nlohmann::json::parse(reinterpret_cast<const char*>(sqlite3_column_text(s.stmt, 0)), nullptr, false);
+    if (j.is_discarded() || !j.is_object()) return R::Failure(path_ + ": a benchmark row is damaged");
+    try {
+      out.push_back(j.get<BenchmarkCost>());
+    } catch (const nlohmann::json::exception&) {
+      return R::Failure(path_ + ": a benchmark row is damaged");
+    }
+  }
+  return out;
 }
 
 Status ResultStore::InsertFit(const std::string& variant, const std::string& param, const std::string& material,
@@ -391,6 +528,10 @@ Result<std::size_t> MergeStores(const std::vector<std::string>& inputs, const st
     Status copied = columns.count("id") && columns.count("job")
                         ? ExecOn(db.get(), "INSERT OR IGNORE INTO main.jobs SELECT " + select + " FROM other.jobs;")
                         : Status::Failure("not a shimmer results store (it has no jobs table)");
+    for (const char* table : {"shots", "benchmarks"})
+      if (copied && HasTable(db.get(), "other", table))
+        copied = ExecOn(db.get(),
+                        std::string("INSERT OR IGNORE INTO main.") + table + " SELECT * FROM other." + table + ";");
     (void)ExecOn(db.get(), "DETACH DATABASE other;");
     if (!copied) return R::Failure(in + ": " + copied.error());
   }
@@ -414,8 +555,10 @@ Result<std::size_t> MergeStores(const std::vector<std::string>& inputs, const st
   if (Status s = ExecOn(db.get(), "ATTACH DATABASE " + SqlQuote(output) + " AS out;"); !s) return fail(s.error());
   std::string columns;
   for (const char* c : kJobColumns) columns += (columns.empty() ? "" : ", ") + std::string(c);
-  Status merged = ExecOn(db.get(), "BEGIN IMMEDIATE; INSERT OR IGNORE INTO out.jobs (" + columns + ") SELECT " +
-                                       columns + " FROM main.jobs; COMMIT;");
+  Status merged =
+      ExecOn(db.get(), "BEGIN IMMEDIATE; INSERT OR IGNORE INTO out.jobs (" + columns + ") SELECT " + columns +
+                           " FROM main.jobs; INSERT OR IGNORE INTO out.shots SELECT * FROM main.shots; "
+                           "INSERT OR IGNORE INTO out.benchmarks SELECT * FROM main.benchmarks; COMMIT;");
   if (!merged) {
     (void)ExecOn(db.get(), "ROLLBACK;");
     (void)ExecOn(db.get(), "DETACH DATABASE out;");

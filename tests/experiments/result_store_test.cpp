@@ -310,3 +310,72 @@ TEST(Report, SpectraOfManyVariantsLookDifferent) {
 
 }  // namespace
 }  // namespace shimmer::experiments
+
+namespace shimmer::experiments {
+namespace {
+
+TEST(ResultStore, ShotChecksAndBenchmarksJoinTheirRowsAndMerge) {
+  TempDir dir;
+  const std::string a = (dir.path / "a.db").string(), all = (dir.path / "all.db").string();
+  JobResult tk = MakeResult("k16-beckmann-rect", 0.5, 3.0);
+  tk.device = "gpu A";
+  JobResult none = MakeResult("none", 0, 9.0);
+  none.job.params.clear();
+  none.id = JobId(none.job);
+  none.device = "gpu A";
+  ShotCheck shot;
+  shot.reference_id = tk.reference_id;
+  shot.scene = "sphere";
+  shot.spp = 4;
+  shot.check_spp = 8;
+  shot.d_energy_bias = 0.05;
+  shot.converged = false;
+  BenchmarkCost cost;
+  cost.scene = "sphere";
+  cost.derivatives = "quad";
+  cost.variant = "k16-beckmann-rect";
+  cost.params = tk.job.params;
+  cost.width = cost.height = 512;
+  cost.median_ms = 3;
+  cost.ratio_to_none = 1.5;
+  BenchmarkCost other_device = cost;
+  other_device.device = "gpu B";
+  other_device.ratio_to_none = 7;
+  cost.device = "gpu A";
+  {
+    auto store = ResultStore::Open(a);
+    ASSERT_TRUE(store) << store.error();
+    ASSERT_TRUE((*store)->Insert(tk));
+    ASSERT_TRUE((*store)->Insert(none));
+    EXPECT_FALSE(*(*store)->HasShot(shot.reference_id));
+    ASSERT_TRUE((*store)->InsertShot(shot));
+    EXPECT_TRUE(*(*store)->HasShot(shot.reference_id));
+    ASSERT_TRUE((*store)->InsertBenchmarks({other_device, cost}));
+  }
+  auto merged = MergeStores({a}, all);
+  ASSERT_TRUE(merged) << merged.error();
+  for (const std::string& path : {a, all}) {
+    auto store = ResultStore::Open(path, ResultStore::Mode::kReadOnly);
+    ASSERT_TRUE(store) << store.error();
+    auto rows = (*store)->All();
+    ASSERT_TRUE(rows) << rows.error();
+    ASSERT_EQ(rows->size(), 2u);
+    for (const JobResult& r : *rows) {
+      ASSERT_TRUE(r.shot) << path;  // both rows share the shot's reference
+      EXPECT_FALSE(r.shot->converged);
+      EXPECT_DOUBLE_EQ(r.shot->d_energy_bias, 0.05);
+      EXPECT_EQ(r.shot->check_spp, 8);
+      if (r.job.variant == "none") {
+        EXPECT_FALSE(r.cost) << "no benchmark row for none";
+      } else {
+        ASSERT_TRUE(r.cost) << path;
+        EXPECT_EQ(r.cost->device, "gpu A") << "the row's own device is preferred";
+        EXPECT_DOUBLE_EQ(r.cost->ratio_to_none, 1.5);
+      }
+    }
+    EXPECT_EQ((*store)->Benchmarks()->size(), 2u);
+  }
+}
+
+}  // namespace
+}  // namespace shimmer::experiments

@@ -35,7 +35,8 @@ struct Workspace {
       "size": [24, 24],
       "frames": 5,
       "reference": {"spp": 2},
-      "metrics": {"highlight_mask": false}
+      "metrics": {"highlight_mask": false},
+      "benchmark": {"size": [32, 32], "repetitions": 3}
     })";
   }
   ~Workspace() { fs::remove_all(dir); }
@@ -125,6 +126,76 @@ TEST(RunCli, ShardsMergedEqualOneRun) {
     EXPECT_EQ(merged.at(id).at("tv_ratio"), metrics.at("tv_ratio")) << id;
     EXPECT_EQ(merged.at(id).at("flicker").at("flicker_index"), metrics.at("flicker").at("flicker_index")) << id;
   }
+}
+
+std::string ReadText(const fs::path& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+// Each shot's reference is checked at twice the samples per axis, every
+// variant is timed in one interleaved batch per (scene, derivatives), and a
+// rerun redoes neither.
+TEST(RunCli, ShotsAreCheckedAndVariantsBenchmarkedOnce) {
+  Workspace ws;
+  ASSERT_EQ(std::system(ws.Run("--db r.db --work r").c_str()), 0) << ReadText(ws.dir / "log.txt");
+  auto store = ResultStore::Open((ws.dir / "r.db").string(), ResultStore::Mode::kReadOnly);
+  ASSERT_TRUE(store) << store.error();
+  auto shots = (*store)->Shots();
+  ASSERT_TRUE(shots) << shots.error();
+  ASSERT_EQ(shots->size(), 2u);  // two materials
+  for (const ShotCheck& shot : *shots) {
+    EXPECT_EQ(shot.spp, 2);
+    EXPECT_EQ(shot.check_spp, 4);
+    EXPECT_GT(shot.tv_ref, 0);
+    EXPECT_EQ(shot.converged, shot.d_energy_bias <= 0.02 && shot.d_tv_ref <= 0.1 && shot.d_tv_err <= 0.1);
+  }
+  auto costs = (*store)->Benchmarks();
+  ASSERT_TRUE(costs) << costs.error();
+  ASSERT_EQ(costs->size(), 4u);  // none, k16-beckmann-rect x 2, tk19 on sphere / quad
+  for (const BenchmarkCost& c : *costs) {
+    EXPECT_EQ(c.width, 32);
+    EXPECT_EQ(c.repetitions, 3);
+    EXPECT_GT(c.median_ms, 0);
+    EXPECT_LE(c.min_ms, c.median_ms);
+    EXPECT_GE(c.max_ms, c.median_ms);
+    EXPECT_NEAR(c.ratio_to_none, c.median_ms / c.none_median_ms, 1e-12);
+    if (c.variant == "none") EXPECT_DOUBLE_EQ(c.ratio_to_none, 1);
+    EXPECT_FALSE(c.device.empty());
+  }
+  auto rows = (*store)->All();
+  ASSERT_TRUE(rows) << rows.error();
+  for (const JobResult& r : *rows) {
+    EXPECT_TRUE(r.shot) << r.id;
+    EXPECT_TRUE(r.cost) << r.id;
+  }
+  const std::size_t before = ReadText(ws.dir / "log.txt").size();
+  ASSERT_EQ(std::system(ws.Run("--db r.db --work r").c_str()), 0);
+  const std::string rerun = ReadText(ws.dir / "log.txt").substr(before);
+  EXPECT_EQ(rerun.find("checked"), std::string::npos) << rerun;
+  EXPECT_EQ(rerun.find("benchmark"), std::string::npos) << rerun;
+}
+
+// A shot whose reference moves beyond reference.converge is marked, and the run says so.
+TEST(RunCli, AShotOutsideTheConvergenceToleranceIsMarkedUnconverged) {
+  Workspace ws;
+  std::string spec = ReadText(ws.dir / "tiny.json");
+  spec.replace(spec.find(R"("reference": {"spp": 2})"), 23,
+               R"("reference": {"spp": 2, "converge": {"energy": 1e-12, "tv": 1e-12}})");
+  std::ofstream(ws.dir / "tiny.json") << spec;
+  ASSERT_EQ(std::system(ws.Run("--db r.db --work r --no-benchmark").c_str()), 0) << ReadText(ws.dir / "log.txt");
+  const std::string log = ReadText(ws.dir / "log.txt");
+  EXPECT_NE(log.find("2 unconverged"), std::string::npos) << log;
+  EXPECT_NE(log.find("warning: 2 shots"), std::string::npos) << log;
+  auto store = ResultStore::Open((ws.dir / "r.db").string(), ResultStore::Mode::kReadOnly);
+  ASSERT_TRUE(store) << store.error();
+  auto shots = (*store)->Shots();
+  ASSERT_TRUE(shots) << shots.error();
+  ASSERT_EQ(shots->size(), 2u);
+  for (const ShotCheck& shot : *shots) EXPECT_FALSE(shot.converged);
+  auto costs = (*store)->Benchmarks();
+  ASSERT_TRUE(costs) << costs.error();
+  EXPECT_TRUE(costs->empty());
 }
 
 TEST(RunCli, MalformedSpecIsRejectedBeforeAnyWork) {

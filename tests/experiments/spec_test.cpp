@@ -4,6 +4,7 @@
 #include <set>
 
 #include "shimmer/experiments/job.h"
+#include "shimmer/experiments/runner.h"
 #include "shimmer/experiments/spec.h"
 
 namespace shimmer::experiments {
@@ -69,7 +70,7 @@ TEST(Spec, IdsAreStable) {
   j.frames = 32;
   j.fps = 30;
   j.reference = {8, 0};
-  EXPECT_EQ(JobIdForCore(j, "test-core"), "beeb2fab076e67d0");
+  EXPECT_EQ(JobIdForCore(j, "test-core"), "f68bcc2395e8ae9a");
   // A default spelled out is the same job; another value is not.
   Job spelled = j;
   spelled.params = {};
@@ -241,5 +242,84 @@ TEST(Spec, IdCoversDefaultParameters) {
   b.params["kappa"] = 0.2;
   EXPECT_NE(JobId(a), JobId(b));
 }
+}  // namespace
+}  // namespace shimmer::experiments
+
+namespace shimmer::experiments {
+namespace {
+
+std::string TrustSpec(const std::string& tail) {
+  return "{\n  \"name\": \"v\",\n  \"scenes\": [\"sphere\", \"wires\"],\n  \"materials\": [\"ggx:0.1\"],\n"
+         "  \"cameras\": [\"orbit\"],\n  \"variants\": [\"none\", \"tk19\", \"supersample-2\"],\n"
+         "  \"derivatives\": [\"quad\", \"analytic\"]" +
+         tail + "\n}";
+}
+
+TEST(Spec, ReferenceReplicatesConvergenceAndBenchmarkParse) {
+  auto r = ParseSpec(TrustSpec(R"(,
+  "reference": {"spp": 6, "replicates": 8, "converge": {"energy": 0.01, "tv": 0.2}},
+  "benchmark": {"size": [256, 128], "repetitions": 3})"),
+                     "v.json");
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_EQ(r->reference.replicates, 8);
+  EXPECT_DOUBLE_EQ(r->reference.converge.energy, 0.01);
+  EXPECT_DOUBLE_EQ(r->reference.converge.tv, 0.2);
+  EXPECT_TRUE(r->benchmark.enabled);
+  EXPECT_EQ(r->benchmark.width, 256);
+  EXPECT_EQ(r->benchmark.height, 128);
+  EXPECT_EQ(r->benchmark.repetitions, 3);
+  // Defaults: 4 replicates, 2 % energy and 10 % tv, 512x512 x 5.
+  auto d = ParseSpec(TrustSpec(""), "v.json");
+  ASSERT_TRUE(d) << d.error();
+  EXPECT_EQ(d->reference.replicates, 4);
+  EXPECT_DOUBLE_EQ(d->reference.converge.energy, 0.02);
+  EXPECT_DOUBLE_EQ(d->reference.converge.tv, 0.10);
+  EXPECT_EQ(d->benchmark.width, 512);
+  EXPECT_EQ(d->benchmark.repetitions, 5);
+  auto off = ParseSpec(TrustSpec(",\n  \"benchmark\": false"), "v.json");
+  ASSERT_TRUE(off) << off.error();
+  EXPECT_FALSE(off->benchmark.enabled);
+
+  // Replicates change the numbers, hence the ids; convergence tolerances change only verdicts.
+  const Job a = ExpandJobs(*r).front(), b = ExpandJobs(*d).front();
+  Job c = b;
+  c.reference.replicates = 8;
+  EXPECT_NE(ReferenceId(b), ReferenceId(c));
+  EXPECT_NE(JobId(b), JobId(c));
+  Job e = b;
+  e.reference.converge.tv = 0.5;
+  EXPECT_EQ(JobId(b), JobId(e));
+  EXPECT_EQ(Job::FromJson(a.ToJson()).reference.replicates, 8);
+
+  for (const auto& [tail, expected] : std::vector<std::pair<std::string, std::string>>{
+           {R"(, "reference": {"replicates": 1})", "replicates: must be at least 2"},
+           {R"(, "reference": {"converge": {"energy": 0}})", "converge: tolerances must be > 0"},
+           {R"(, "reference": {"converge": {"enrgy": 0.1}})", "enrgy: unknown key"},
+           {R"(, "benchmark": {"size": [511, 512]})", "benchmark.size: width and height must be even"},
+           {R"(, "benchmark": {"repetitions": 0})", "benchmark.repetitions: must be an integer"},
+           {R"(, "benchmark": 3)", "benchmark: must be true, false or"},
+       }) {
+    auto bad = ParseSpec(TrustSpec(tail), "bad.json");
+    ASSERT_FALSE(bad) << tail;
+    EXPECT_NE(bad.error().find(expected), std::string::npos) << bad.error();
+  }
+}
+
+TEST(Spec, BenchmarkBatchesHoldEveryVariantOfAScenesDerivativeSourceWithNoneFirst) {
+  auto r = ParseSpec(TrustSpec(""), "v.json");
+  ASSERT_TRUE(r) << r.error();
+  const auto batches = BenchmarkBatches(ExpandJobs(*r));
+  // 2 scenes x 2 derivative sources; none and supersample-2 join both sources.
+  ASSERT_EQ(batches.size(), 4u);
+  for (const BenchmarkBatch& b : batches) {
+    ASSERT_EQ(b.jobs.size(), 3u) << b.scene << " " << b.derivatives;
+    EXPECT_EQ(b.jobs[0].variant, "none");
+    for (const Job& j : b.jobs) {
+      EXPECT_EQ(j.scene, b.scene);
+      EXPECT_EQ(j.derivatives, b.derivatives);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace shimmer::experiments

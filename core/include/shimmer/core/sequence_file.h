@@ -26,6 +26,7 @@ struct SequenceFrame {
   double time_s = 0;
   std::optional<double> mean_spp;  // references only
   std::optional<int> rounds;       // references only
+  std::optional<long long> unconverged_pixels;  // adaptive references: pixels left above the tolerance
 };
 
 struct SequenceCamera {

@@ -25,7 +25,7 @@ namespace shimmer::experiments {
 struct ShotCheck {
   std::string reference_id;
   std::string scene, material, camera;
-  int spp = 0, check_spp = 0;               // N and 2N per axis (per replicate)
+  int spp = 0, check_spp = 0;                 // N and 2N per axis (per replicate)
   double tolerance = 0, check_tolerance = 0;  // adaptive references
   // Metrics of `none` against the reference at N (as the jobs are measured) and at 2N.
   double tv_ref = 0, tv_ref_check = 0;
@@ -34,8 +34,8 @@ struct ShotCheck {
   // |tv_ref_check / tv_ref - 1|, |energy_bias_check - energy_bias|, |tv_err_check / tv_err - 1|.
   double d_tv_ref = 0, d_energy_bias = 0, d_tv_err = 0;
   double tol_energy = 0.02, tol_tv = 0.10;  // the spec's reference.converge
-  long long unconverged_pixels = 0;  // pixel-frames of the reference left above its tolerance at max_rounds
-  bool converged = false;            // every change within its tolerance
+  long long unconverged_pixels = 0;         // pixel-frames of the reference left above its tolerance at max_rounds
+  bool converged = false;                   // every change within its tolerance
 };
 
 // Cost as a benchmark (DESIGN.md, Trust): dedicated timing renders at the
@@ -52,6 +52,14 @@ struct BenchmarkCost {
   double ratio_to_none = 0;                      // median_ms / none_median_ms
   std::string device, driver;
 };
+
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotCheck, reference_id, scene, material, camera, spp, check_spp,
+                                                tolerance, check_tolerance, tv_ref, tv_ref_check, energy_bias,
+                                                energy_bias_check, tv_err, tv_err_check, d_tv_ref, d_energy_bias,
+                                                d_tv_err, tol_energy, tol_tv, unconverged_pixels, converged)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BenchmarkCost, scene, derivatives, variant, params, material, camera,
+                                                width, height, repetitions, median_ms, min_ms, max_ms, none_median_ms,
+                                                ratio_to_none, device, driver)
 
 struct JobResult {
   std::string id;
@@ -90,6 +98,15 @@ class ResultStore {
   Result<std::vector<JobResult>> All();
   Result<std::optional<JobResult>> Get(const std::string& id);
 
+  // Convergence checks, one per reference id (replaced when run again).
+  Result<bool> HasShot(const std::string& reference_id);
+  Status InsertShot(const ShotCheck& shot);
+  Result<std::vector<ShotCheck>> Shots();
+
+  // Benchmark costs, one per (scene, derivatives, variant, params, size, device).
+  Status InsertBenchmarks(const std::vector<BenchmarkCost>& costs);  // one transaction
+  Result<std::vector<BenchmarkCost>> Benchmarks();
+
   // Fit results (table `fits`), one row per (variant, parameter, material) of
   // a fit, replaced when the fit is run again; `result` is the fit's JSON.
   Status InsertFit(const std::string& variant, const std::string& param, const std::string& material, double value,
@@ -104,7 +121,8 @@ class ResultStore {
   sqlite3* db_;
   std::string path_;
   bool has_device_columns_ = true;
-  bool writable_ = false;  // opened kReadWrite and switched to WAL
+  bool has_verdict_tables_ = true;  // shots and benchmarks (a read-only old store may lack them)
+  bool writable_ = false;           // opened kReadWrite and switched to WAL
 };
 
 // Joins the jobs of `inputs` into `output` (created when missing; rows whose

@@ -34,12 +34,18 @@ struct RunOptions {
   bool keep_frames = false;
   int jobs = 1;        // jobs measured at once (each renders, then measures)
   std::string device;  // Vulkan device name substring
+  // After the jobs: each shot's reference checked at twice the samples per
+  // axis (ShotCheck), and the benchmark batches timed (none: skipped).
+  bool check_shots = true;
+  std::optional<BenchmarkOptions> benchmark;
   std::function<void(const RunProgress&)> progress;
 };
 
 struct RunSummary {
   int total = 0, skipped = 0, computed = 0;
-  std::optional<Error> error;  // set when a job failed; the jobs before it are stored
+  int shots_checked = 0, shots_unconverged = 0;  // checks run by this run, and how many failed
+  int benchmarks = 0;                            // batches timed by this run
+  std::optional<Error> error;                    // set when a job failed; the jobs before it are stored
 };
 
 // Every job is checked (scene, material, variant, parameters, sizes) before
@@ -56,5 +62,23 @@ Result<JobResult> MeasureJob(const Job& job, const RunOptions& options);
 
 // Renders the job's reference into the cache unless it is there.
 Status EnsureReference(const Job& job, const RunOptions& options);
+
+// The shot's reference checked: `none` measured against it and against a
+// reference with twice the samples per axis (half the tolerance when
+// adaptive), compared with the spec's reference.converge.
+Result<ShotCheck> CheckShot(const Job& job, const RunOptions& options);
+
+// The variants of one (scene, derivative source), `none` first, each as a job
+// of the batch's material and camera (the first job's).
+struct BenchmarkBatch {
+  std::string scene, derivatives;
+  std::vector<Job> jobs;
+};
+std::vector<BenchmarkBatch> BenchmarkBatches(const std::vector<Job>& jobs);
+
+// Renders every job of `batch` at the benchmark size, interleaved, after one
+// warm-up frame each; GPU ms per frame from the renderer's timestamps.
+Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, const BenchmarkOptions& bench,
+                                                const RunOptions& options);
 
 }  // namespace shimmer::experiments

@@ -26,9 +26,9 @@ struct ConvergenceTolerance {
 };
 
 struct ReferenceQuality {
-  int spp = 8;           // N x N stratified samples per pixel and replicate
-  double tolerance = 0;  // > 0: adaptive to this relative standard error instead
-  int replicates = 4;    // independent N x N patterns per pixel: the standard error comes from their spread
+  int spp = 8;                    // N x N stratified samples per pixel and replicate
+  double tolerance = 0;           // > 0: adaptive to this relative standard error instead
+  int replicates = 4;             // independent N x N patterns per pixel: the standard error comes from their spread
   ConvergenceTolerance converge;  // not part of job ids: it changes verdicts, not numbers
 };
 

@@ -62,6 +62,7 @@ struct RenderSettings {
   int reference_spp = 0;           // N: N x N stratified samples of `none` with a stderr layer (0: not a reference)
   double reference_tolerance = 0;  // > 0: adaptive, rounds of N x N until stderr <= tolerance * max(Y, floor)
   int max_rounds = 64;             // adaptive cap
+  int reference_replicates = 4;    // independent N x N patterns per pixel (rounds)
   std::string variant_file;        // user variant GLSL defining userVariant(...)
   std::string device;              // substring of the Vulkan device name
   std::string preview_png;         // when set: a tone-mapped PNG of frame 0's beauty

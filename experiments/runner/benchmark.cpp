@@ -1,0 +1,112 @@
+// Cost as a benchmark, not a by-product (DESIGN.md, Trust): the per-job GPU
+// time of small metric renders on shared cores swings by 2x between runs,
+// so costs come from dedicated renders at a benchmark size, every variant of
+// a batch interleaved repetition by repetition (a slow spell of the machine
+// then hits all of them alike), after a warm-up frame that takes the JIT.
+#include <algorithm>
+#include <map>
+#include <memory>
+#include <set>
+
+#include "runner_parts.h"
+#include "shimmer/experiments/runner.h"
+
+namespace shimmer::experiments {
+
+namespace {
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+}  // namespace
+
+std::vector<BenchmarkBatch> BenchmarkBatches(const std::vector<Job>& jobs) {
+  std::vector<BenchmarkBatch> batches;
+  std::set<std::string> derivative_sources;
+  for (const Job& job : jobs) derivative_sources.insert(job.derivatives);
+  for (const Job& job : jobs) {
+    // Variants that read no derivatives cost the same under every source:
+    // they join every batch of their scene, so that each batch has its `none`.
+    for (const std::string& derivatives : derivative_sources) {
+      if (ReadsDerivatives(job.variant) && derivatives != job.derivatives) continue;
+      auto it = std::find_if(batches.begin(), batches.end(), [&](const BenchmarkBatch& b) {
+        return b.scene == job.scene && b.derivatives == derivatives;
+      });
+      if (it == batches.end()) {
+        Job none = job;
+        none.variant = "none";
+        none.params.clear();
+        none.derivatives = derivatives;
+        batches.push_back({job.scene, derivatives, {none}});
+        it = batches.end() - 1;
+      }
+      const bool present = std::any_of(it->jobs.begin(), it->jobs.end(), [&](const Job& j) {
+        return j.variant == job.variant && j.params == job.params;
+      });
+      if (present) continue;
+      Job member = it->jobs.front();  // the batch's material, camera and motion
+      member.variant = job.variant;
+      member.params = job.params;
+      it->jobs.push_back(member);
+    }
+  }
+  return batches;
+}
+
+Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, const BenchmarkOptions& bench,
+                                                const RunOptions& options) {
+  using R = Result<std::vector<BenchmarkCost>>;
+  std::vector<std::unique_ptr<render::Renderer>> renderers;
+  for (const Job& job : batch.jobs) {
+    auto settings = JobSettings(job, options);
+    if (!settings) return settings.failure();
+    settings->width = bench.width;
+    settings->height = bench.height;
+    auto renderer = render::Renderer::Create(*settings);
+    if (!renderer) return Prefixed("benchmark of " + job.variant, renderer.failure());
+    // Warm-up: lavapipe compiles the pipeline on its first dispatch.
+    if (auto warm = (*renderer)->RenderFrame(0); !warm) return Prefixed("benchmark of " + job.variant, warm.failure());
+    renderers.push_back(std::move(*renderer));
+  }
+  std::vector<std::vector<double>> ms(renderers.size());
+  const int frames = batch.jobs.front().frames;
+  for (int rep = 0; rep < bench.repetitions; ++rep) {
+    // Different frames of the path, the same ones for every variant.
+    const int frame = bench.repetitions > 1 ? rep * (frames - 1) / (bench.repetitions - 1) : 0;
+    for (std::size_t k = 0; k < renderers.size(); ++k) {
+      auto f = renderers[k]->RenderFrame(frame);
+      if (!f) return Prefixed("benchmark of " + batch.jobs[k].variant, f.failure());
+      ms[k].push_back(f->gpu_ms);
+    }
+  }
+  std::vector<BenchmarkCost> costs;
+  const double none_ms = Median(ms.front());
+  for (std::size_t k = 0; k < renderers.size(); ++k) {
+    const Job& job = batch.jobs[k];
+    BenchmarkCost c;
+    c.scene = batch.scene;
+    c.derivatives = batch.derivatives;
+    c.variant = job.variant;
+    c.params = job.params;
+    c.material = job.material;
+    c.camera = job.camera;
+    c.width = bench.width;
+    c.height = bench.height;
+    c.repetitions = bench.repetitions;
+    c.median_ms = Median(ms[k]);
+    c.min_ms = *std::min_element(ms[k].begin(), ms[k].end());
+    c.max_ms = *std::max_element(ms[k].begin(), ms[k].end());
+    c.none_median_ms = none_ms;
+    c.ratio_to_none = none_ms > 0 ? c.median_ms / none_ms : 0;
+    c.device = renderers[k]->device_name();
+    c.driver = renderers[k]->device_driver();
+    costs.push_back(std::move(c));
+  }
+  if (costs.empty()) return R::Failure("benchmark: an empty batch");
+  return costs;
+}
+
+}  // namespace shimmer::experiments

@@ -1,0 +1,31 @@
+// What the runner's pieces share (runner.cpp: jobs; shot_check.cpp: the
+// reference's convergence; benchmark.cpp: timing renders).
+#pragma once
+
+#include <filesystem>
+
+#include "shimmer/core/result.h"
+#include "shimmer/core/sequence_file.h"
+#include "shimmer/experiments/job.h"
+#include "shimmer/experiments/runner.h"
+#include "shimmer/metrics/metrics_report.h"
+#include "shimmer/renderer/renderer.h"
+
+namespace shimmer::experiments {
+
+// Renders into dir.partial and renames: a directory under its final name is
+// always a complete sequence. A complete one already there is kept.
+Result<SequenceFile> RenderInto(const render::RenderSettings& settings, const std::filesystem::path& dir);
+
+std::filesystem::path ReferenceDirectory(const Job& job, const RunOptions& options);
+
+// The settings of the job's reference (`none`, supersampled, with replicates).
+Result<render::RenderSettings> ReferenceSettings(const Job& job, const RunOptions& options);
+
+// The job's metrics of `test` against `reference`: over the job's highlight
+// region, or over `mask` (a PNG) when given.
+Result<metrics::MetricsReport> MeasureAgainst(const Job& job, const std::filesystem::path& test,
+                                              const std::filesystem::path& reference,
+                                              const std::filesystem::path& mask);
+
+}  // namespace shimmer::experiments

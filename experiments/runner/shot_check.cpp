@@ -1,0 +1,103 @@
+// A shot's reference shown converged, not assumed (DESIGN.md, Trust): the
+// metrics of `none` against the reference must barely move when the
+// reference doubles its samples per axis.
+#include <cmath>
+#include <filesystem>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "runner_parts.h"
+#include "shimmer/core/sequence_file.h"
+#include "shimmer/experiments/runner.h"
+#include "shimmer/metrics/metrics_report.h"
+
+namespace shimmer::experiments {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+double RelativeChange(double check, double base) {
+  if (base == 0) return check == 0 ? 0 : INFINITY;
+  return std::abs(check / base - 1);
+}
+
+// Reference pixels (summed over frames) left above the adaptive tolerance.
+long long UnconvergedPixels(const fs::path& dir) {
+  auto sequence = ReadSequenceFile(dir / "sequence.json");
+  if (!sequence) return 0;
+  long long n = 0;
+  for (const SequenceFrame& f : sequence->frames) n += f.unconverged_pixels.value_or(0);
+  return n;
+}
+
+}  // namespace
+
+Result<ShotCheck> CheckShot(const Job& shot_job, const RunOptions& options) {
+  Job job = shot_job;
+  job.variant = "none";
+  job.params.clear();
+  if (Status s = EnsureReference(job, options); !s) return s.failure();
+
+  ShotCheck c;
+  c.reference_id = ReferenceId(job);
+  c.scene = job.scene;
+  c.material = job.material;
+  c.camera = job.camera;
+  c.spp = job.reference.spp;
+  c.tolerance = job.reference.tolerance;
+  // Twice the samples per axis; an adaptive reference goes one level finer
+  // (half the tolerance: four times the samples where they are needed).
+  Job check = job;
+  check.reference.spp = std::min(2 * job.reference.spp, render::kMaxReferenceSpp);
+  check.reference.tolerance = job.reference.tolerance / 2;
+  c.check_spp = check.reference.spp;
+  c.check_tolerance = check.reference.tolerance;
+  c.tol_energy = job.reference.converge.energy;
+  c.tol_tv = job.reference.converge.tv;
+  if (c.check_spp == c.spp && c.tolerance == 0)
+    return Result<ShotCheck>::Failure("reference.spp: " + std::to_string(c.spp) +
+                                      " leaves no room to check convergence at twice the samples per axis (at most " +
+                                      std::to_string(render::kMaxReferenceSpp) + ")");
+
+  const fs::path work(options.work_dir);
+  const fs::path ref_dir = ReferenceDirectory(job, options);
+  const fs::path check_dir = work / ("check-" + c.reference_id);
+  const fs::path none_dir = work / ("none-" + c.reference_id);
+  auto reference_settings = ReferenceSettings(check, options);
+  if (!reference_settings) return reference_settings.failure();
+  if (auto r = RenderInto(*reference_settings, check_dir); !r) return Prefixed("check reference", r.failure());
+  auto none_settings = JobSettings(job, options);
+  if (!none_settings) return none_settings.failure();
+  if (auto r = RenderInto(*none_settings, none_dir); !r) return r.failure();
+
+  // Both measured over the same pixels: the region of the shot's own
+  // reference, as the jobs are measured.
+  auto at_n = MeasureAgainst(job, none_dir, ref_dir, {});
+  if (!at_n) return at_n.failure();
+  const fs::path mask = check_dir / "region.png";
+  cv::Mat region = at_n->region_mask * 255;
+  if (!cv::imwrite(mask.string(), region))
+    return Result<ShotCheck>::Failure(mask.string() + ": cannot write the region mask", ErrorCode::kIo);
+  auto at_2n = MeasureAgainst(job, none_dir, check_dir, mask);
+  if (!at_2n) return at_2n.failure();
+
+  c.tv_ref = at_n->tv_ref.value_or(0);
+  c.tv_ref_check = at_2n->tv_ref.value_or(0);
+  c.energy_bias = at_n->energy_bias.value_or(0);
+  c.energy_bias_check = at_2n->energy_bias.value_or(0);
+  c.tv_err = at_n->tv_err.value_or(0);
+  c.tv_err_check = at_2n->tv_err.value_or(0);
+  c.d_tv_ref = RelativeChange(c.tv_ref_check, c.tv_ref);
+  c.d_energy_bias = std::abs(c.energy_bias_check - c.energy_bias);
+  c.d_tv_err = RelativeChange(c.tv_err_check, c.tv_err);
+  c.unconverged_pixels = UnconvergedPixels(ref_dir);
+  c.converged = c.d_energy_bias <= c.tol_energy && c.d_tv_ref <= c.tol_tv && c.d_tv_err <= c.tol_tv;
+
+  std::error_code ec;
+  fs::remove_all(none_dir, ec);
+  if (!options.keep_frames) fs::remove_all(check_dir, ec);
+  return c;
+}
+
+}  // namespace shimmer::experiments

@@ -11,7 +11,7 @@ packages=(
   libceres-dev libeigen3-dev
   libcli11-dev nlohmann-json3-dev libsqlite3-dev libglm-dev
   libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
-  gnuplot-nox
+  gnuplot-nox chromium
 )
 
 missing=()

@@ -1,13 +1,18 @@
 #include "shimmer/experiments/report.h"
 
 #include <algorithm>
+#include <cmath>
+#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
+#include <tuple>
 
+#include "report_document.h"
 #include "report_parts.h"
 #include "shimmer/core/gnuplot.h"
 #include "shimmer/experiments/output_files.h"
+#include "shimmer/renderer/scene.h"
 #include "shimmer/renderer/shading.h"
 
 namespace shimmer::experiments {
@@ -31,35 +36,159 @@ bool IsSupersample(const JobResult& r) {
   return name && name->kind == shading::VariantName::Kind::kSupersample;
 }
 
+std::string DeviceOf(const JobResult& r) { return r.device.empty() ? "unrecorded" : r.device; }
+
+double AlphaOf(const std::string& material) {
+  auto m = scene::ParseMaterial(material, shading::MaterialDesc{});
+  if (!m || m->alpha.x <= 0 || m->alpha.y <= 0) return kNaN;
+  return std::sqrt(m->alpha.x * m->alpha.y);
+}
+
+std::string RoughnessClass(double alpha) {
+  if (std::isnan(alpha)) return "α unknown";
+  if (alpha <= 0.02) return "α ≤ 0.02";
+  if (alpha <= 0.1) return "0.02 < α ≤ 0.1";
+  if (alpha <= 0.3) return "0.1 < α ≤ 0.3";
+  return "α > 0.3";
+}
+
+std::string GeometryClass(const std::string& scene) {
+  if (scene == "sphere" || scene == "sphere-field") return "small curved";
+  if (scene == "wires") return "thin";
+  if (scene == "bumpy-plane") return "flat with normal detail";
+  return "other";
+}
+
+Interval Ci95(const JobResult& row, const char* key) {
+  const auto ci = row.metrics.find("ci95");
+  if (ci == row.metrics.end() || !ci->is_object()) return {};
+  const auto v = ci->find(key);
+  if (v == ci->end() || !v->is_array() || v->size() != 2 || !(*v)[0].is_number() || !(*v)[1].is_number()) return {};
+  return {(*v)[0].get<double>(), (*v)[1].get<double>()};
+}
+
+Verdict Compare(Interval a, Interval b) {
+  if (!a.Known() || !b.Known()) return Verdict::kUnknown;
+  if (a.hi < b.lo) return Verdict::kBetter;
+  if (b.hi < a.lo) return Verdict::kWorse;
+  return Verdict::kIndistinguishable;
+}
+
+const ShotCheck* CheckOf(const Group& group) {
+  const ShotCheck* check = nullptr;
+  for (const JobResult* r : group.rows)
+    if (r->shot && (!check || !r->shot->converged)) check = &*r->shot;
+  return check;
+}
+
+Convergence ConvergenceOf(const Group& group) {
+  const ShotCheck* check = CheckOf(group);
+  if (!check) return Convergence::kUnchecked;
+  return check->converged ? Convergence::kConverged : Convergence::kUnconverged;
+}
+
+Quartiles QuartilesOf(std::vector<double> values) {
+  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return std::isnan(v); }), values.end());
+  Quartiles q;
+  q.n = int(values.size());
+  if (values.empty()) return q;
+  std::sort(values.begin(), values.end());
+  auto at = [&](double p) {
+    const double pos = p * double(values.size() - 1);
+    const std::size_t i = std::size_t(std::floor(pos));
+    const double t = pos - double(i);
+    return i + 1 < values.size() ? values[i] + t * (values[i + 1] - values[i]) : values[i];
+  };
+  q.q1 = at(0.25), q.median = at(0.5), q.q3 = at(0.75);
+  return q;
+}
+
+const JobResult* NoneOf(const Group& group) {
+  for (const JobResult* r : group.rows)
+    if (r->job.variant == "none") return r;
+  return nullptr;
+}
+
+std::vector<Sample> SamplesOf(const Group& group) {
+  const JobResult* none = NoneOf(group);
+  const double none_err = none ? Metric(none->metrics, "tv_err") : kNaN;
+  const Interval none_ci = none ? Ci95(*none, "tv_err") : Interval{};
+  std::vector<Sample> out;
+  for (const JobResult* r : group.rows) {
+    Sample s;
+    s.group = &group, s.row = r;
+    const double err = Metric(r->metrics, "tv_err");
+    if (none_err > 0) s.ratio = err / none_err;
+    const Interval ci = Ci95(*r, "tv_err");
+    if (ci.Known() && none_ci.Known() && none_ci.lo > 0) s.ratio_ci = {ci.lo / none_ci.hi, ci.hi / none_ci.lo};
+    s.energy_bias = Metric(r->metrics, "energy_bias");
+    out.push_back(s);
+  }
+  return out;
+}
+
 std::vector<Group> GroupRows(const std::vector<JobResult>& rows) {
-  std::map<std::string, std::vector<const JobResult*>> groups;
+  std::map<std::string, Group> groups;
   std::map<std::string, std::set<std::string>> sources_of_shot;
   auto shot = [](const JobResult& r) { return r.job.scene + " / " + r.job.material + " / " + r.job.camera; };
   for (const JobResult& r : rows) sources_of_shot[shot(r)].insert(r.job.derivatives);
+  auto add = [&](const JobResult& r, const std::string& source) {
+    Group& g = groups[shot(r) + " / " + source];
+    if (g.rows.empty()) {
+      g.key = shot(r) + " / " + source;
+      g.scene = r.job.scene, g.material = r.job.material, g.camera = r.job.camera, g.derivatives = source;
+      g.alpha = AlphaOf(r.job.material);
+    }
+    g.rows.push_back(&r);
+  };
   for (const JobResult& r : rows) {
     if (ReadsDerivatives(r.job.variant)) {
-      groups[shot(r) + " / " + r.job.derivatives].push_back(&r);
+      add(r, r.job.derivatives);
       continue;
     }
-    for (const std::string& source : sources_of_shot[shot(r)]) groups[shot(r) + " / " + source].push_back(&r);
+    for (const std::string& source : sources_of_shot[shot(r)]) add(r, source);
   }
   std::vector<Group> out;
   for (auto& [key, group] : groups) {
-    std::sort(group.begin(), group.end(), [](const JobResult* a, const JobResult* b) { return Label(*a) < Label(*b); });
-    out.push_back({key, std::move(group)});
+    std::sort(group.rows.begin(), group.rows.end(),
+              [](const JobResult* a, const JobResult* b) { return Label(*a) < Label(*b); });
+    out.push_back(std::move(group));
   }
+  // NaN α (unreadable material) sorts after every number.
+  auto order = [](const Group& g) {
+    return std::make_tuple(g.scene, std::isnan(g.alpha), std::isnan(g.alpha) ? 0.0 : g.alpha, g.material, g.camera,
+                           g.derivatives);
+  };
+  std::stable_sort(out.begin(), out.end(), [&](const Group& a, const Group& b) { return order(a) < order(b); });
   return out;
 }
 
 Costs CostsOf(const Group& group) {
   Costs c;
+  std::set<std::string> bench_devices, render_devices;
+  bool all_bench = true;
   for (const JobResult* r : group.rows) {
-    c.ms.push_back(r->gpu_ms_per_frame);
+    if (r->cost)
+      bench_devices.insert(r->cost->device);
+    else
+      all_bench = false;
+    render_devices.insert(DeviceOf(*r));
     c.tv_err.push_back(Metric(r->metrics, "tv_err"));
     c.relmse.push_back(Metric(r->metrics, "relmse"));
   }
+  if (all_bench && bench_devices.size() == 1) {
+    c.source = "benchmark median GPU ms per frame on " + *bench_devices.begin();
+    for (const JobResult* r : group.rows) c.ms.push_back(r->cost->median_ms);
+  } else if (render_devices.size() == 1) {
+    c.source = "the metric render's GPU ms per frame on " + *render_devices.begin() +
+               " (no benchmark for every row: small renders, noisy)";
+    for (const JobResult* r : group.rows) c.ms.push_back(r->gpu_ms_per_frame);
+  } else {
+    c.source = "none: the rows ran on several devices, whose times are not comparable";
+  }
   c.front_tv_err.assign(group.rows.size(), false);
   c.front_relmse.assign(group.rows.size(), false);
+  if (c.ms.empty()) return c;
   for (int i : ParetoFront(c.ms, c.tv_err)) c.front_tv_err[i] = true;
   for (int i : ParetoFront(c.ms, c.relmse)) c.front_relmse[i] = true;
   return c;
@@ -86,19 +215,33 @@ Status WriteReport(const std::vector<JobResult>& rows, const std::string& title,
   StagedDirectory& dir = **staged;
   if (Status s = dir.Write("report.csv", report::Csv(rows)); !s) return s;
   const std::vector<report::Group> groups = report::GroupRows(rows);
-  std::vector<std::string> scripts;
+  const report::Document doc = report::BuildDocument(groups, title, rows.size());
+
+  std::vector<report::PlotFile> files;
   for (const report::Group& group : groups)
-    for (const report::PlotFile& f : report::Plots(group)) {
-      if (Status s = dir.Write(f.name, f.text); !s) return s;
-      if (f.script) scripts.push_back(f.name);
-    }
+    for (report::PlotFile& f : report::Plots(group)) files.push_back(std::move(f));
+  std::vector<const report::Group*> included;
+  for (const report::Group& g : groups)
+    if (report::ConvergenceOf(g) != report::Convergence::kUnconverged) included.push_back(&g);
+  for (report::PlotFile& f : report::Heatmap(report::Summarise(included), included)) files.push_back(std::move(f));
+  std::vector<std::string> scripts;
+  for (const report::PlotFile& f : files) {
+    if (Status s = dir.Write(f.name, f.text); !s) return s;
+    if (f.script) scripts.push_back(f.name);
+  }
   for (const std::string& script : scripts)
     if (Status s = RunGnuplot(dir.staging(), script); !s) {
       // gnuplot missing or failing costs the plots; a plot cut short (a full disk) fails the report.
       if (s.code() == ErrorCode::kIo) return dir.Unstaged(s.failure());
       if (warnings) warnings->push_back(s.error());
     }
-  if (Status s = dir.Write("report.md", report::Markdown(groups, title, rows.size())); !s) return s;
+  const std::string html = report::ToHtml(doc, [&](const std::string& file) -> std::optional<std::string> {
+    std::ifstream in(dir.staging() / file, std::ios::binary);
+    if (!in) return std::nullopt;
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+  });
+  if (Status s = dir.Write("report.html", html); !s) return s;
+  if (Status s = dir.Write("report.md", report::ToMarkdown(doc)); !s) return s;
   return dir.Commit("report.md");
 }
 

@@ -4,15 +4,57 @@
 namespace shimmer::experiments::report {
 
 std::string Csv(const std::vector<JobResult>& rows) {
-  CsvTable table({"scene", "material", "camera", "variant", "params", "derivatives", "region", "tv_ratio", "tv_err",
-                  "energy_bias", "temporal_diff_err", "relmse", "flicker_index", "ms_per_frame", "device", "driver"});
+  std::vector<std::string> header = {
+      "scene",    "material", "camera",      "variant",           "params", "derivatives",   "region",
+      "tv_ratio", "tv_err",   "energy_bias", "temporal_diff_err", "relmse", "flicker_index", "ms_per_frame",
+      "device",   "driver"};
+  // Added after the original columns, so that readers by position keep working.
+  static constexpr const char* kIntervals[] = {"tv_err", "tv_ratio", "energy_bias", "relmse", "flicker_index"};
+  for (const char* key : kIntervals) header.insert(header.end(), {std::string(key) + "_lo", std::string(key) + "_hi"});
+  header.insert(header.end(), {"tv_err_floor", "reference", "reference_spp", "check_spp", "d_tv_ref", "d_energy_bias",
+                               "d_tv_err", "bench_median_ms", "bench_min_ms", "bench_max_ms", "bench_ratio_to_none",
+                               "bench_width", "bench_height", "bench_device", "bench_driver"});
+  CsvTable table(header);
   for (const JobResult& r : rows) {
     const auto& m = r.metrics;
-    table.AddRow({r.job.scene, r.job.material, r.job.camera, r.job.variant, nlohmann::json(r.job.params).dump(),
-                  r.job.derivatives, Region(r), CsvNumber(Metric(m, "tv_ratio")), CsvNumber(Metric(m, "tv_err")),
-                  CsvNumber(Metric(m, "energy_bias")), CsvNumber(Metric(m, "temporal_diff_err")),
-                  CsvNumber(Metric(m, "relmse")), CsvNumber(FlickerIndex(m)), CsvNumber(r.gpu_ms_per_frame), r.device,
-                  r.driver});
+    std::vector<std::string> fields = {r.job.scene,
+                                       r.job.material,
+                                       r.job.camera,
+                                       r.job.variant,
+                                       nlohmann::json(r.job.params).dump(),
+                                       r.job.derivatives,
+                                       Region(r),
+                                       CsvNumber(Metric(m, "tv_ratio")),
+                                       CsvNumber(Metric(m, "tv_err")),
+                                       CsvNumber(Metric(m, "energy_bias")),
+                                       CsvNumber(Metric(m, "temporal_diff_err")),
+                                       CsvNumber(Metric(m, "relmse")),
+                                       CsvNumber(FlickerIndex(m)),
+                                       CsvNumber(r.gpu_ms_per_frame),
+                                       r.device,
+                                       r.driver};
+    for (const char* key : kIntervals) {
+      const Interval ci = Ci95(r, key);
+      fields.insert(fields.end(), {CsvNumber(ci.lo), CsvNumber(ci.hi)});
+    }
+    fields.push_back(CsvNumber(Metric(m, "tv_err_floor")));
+    if (r.shot) {
+      const ShotCheck& c = *r.shot;
+      fields.insert(fields.end(),
+                    {c.converged ? "converged" : "unconverged", std::to_string(c.spp), std::to_string(c.check_spp),
+                     CsvNumber(c.d_tv_ref), CsvNumber(c.d_energy_bias), CsvNumber(c.d_tv_err)});
+    } else {
+      fields.insert(fields.end(), {"unchecked", "", "", "", "", ""});
+    }
+    if (r.cost) {
+      const BenchmarkCost& c = *r.cost;
+      fields.insert(fields.end(),
+                    {CsvNumber(c.median_ms), CsvNumber(c.min_ms), CsvNumber(c.max_ms), CsvNumber(c.ratio_to_none),
+                     std::to_string(c.width), std::to_string(c.height), c.device, c.driver});
+    } else {
+      fields.insert(fields.end(), {"", "", "", "", "", "", "", ""});
+    }
+    table.AddRow(fields);
   }
   return table.Text();
 }

@@ -1,8 +1,13 @@
-// The pieces of a report, each written by its own file: the CSV of every row
-// (report_csv.cpp), the markdown tables and summary (report_markdown.cpp),
-// and the plot data and gnuplot scripts (report_plots.cpp).
+// The pieces of a report, each written by its own file: the grouping and the
+// per-row quantities (report.cpp), the overview across shots: leaderboard,
+// classes, recommendations (report_overview.cpp), the document that
+// report.md and report.html are both rendered from (report_document.cpp,
+// report_markdown.cpp, report_html.cpp), the CSV of every row
+// (report_csv.cpp), and the plot data and gnuplot scripts (report_plots.cpp).
 #pragma once
 
+#include <limits>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -11,18 +16,110 @@
 
 namespace shimmer::experiments::report {
 
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// A filter must keep the highlight: one that flattens it scores a low tv_err
+// by losing energy, so verdicts only count rows within this energy bias.
+constexpr double kBiasTolerance = 0.10;
+
 // One table and set of plots: the rows of a (scene, material, camera,
 // derivatives) shot, sorted by label. `none` and `supersample-N` read no
 // derivatives; they join every derivative group of their shot as baselines.
 struct Group {
   std::string key;  // "scene / material / camera / derivatives"
+  std::string scene, material, camera, derivatives;
+  double alpha = kNaN;  // the material's roughness (geometric mean when anisotropic)
   std::vector<const JobResult*> rows;
+  std::string Shot() const { return scene + " / " + material + " / " + camera; }
 };
+// Ordered by scene, then α, then material, camera and derivative source.
 std::vector<Group> GroupRows(const std::vector<JobResult>& rows);
 
-// Speed against error for a group's rows, in its order, and which rows are
-// on the Pareto front of (ms per frame, tv_err) and of (ms per frame, relmse).
+// The material's α ("ggx:0.02" → 0.02; "ggx:0.1,0.02" → √(0.1·0.02)); NaN when unreadable.
+double AlphaOf(const std::string& material);
+std::string RoughnessClass(double alpha);  // "α ≤ 0.02", "0.02 < α ≤ 0.1", "0.1 < α ≤ 0.3", "α > 0.3"
+std::string GeometryClass(const std::string& scene);
+
+// A metric's 95 % interval, metrics.ci95[key] = [lo, hi]; unknown when the
+// store predates intervals.
+struct Interval {
+  double lo = kNaN, hi = kNaN;
+  bool Known() const { return lo == lo && hi == hi; }
+};
+Interval Ci95(const JobResult& row, const char* key);
+
+// Lower is better. kBetter only when a's interval lies wholly below b's.
+enum class Verdict { kBetter, kWorse, kIndistinguishable, kUnknown };
+Verdict Compare(Interval a, Interval b);
+
+enum class Convergence { kConverged, kUnconverged, kUnchecked };
+// From the rows' ShotCheck: unconverged when any says so, unchecked when none has one.
+Convergence ConvergenceOf(const Group& group);
+const ShotCheck* CheckOf(const Group& group);
+
+// Quartiles by linear interpolation between order statistics (numpy's
+// default); NaN for no values. NaN inputs are dropped.
+struct Quartiles {
+  double q1 = kNaN, median = kNaN, q3 = kNaN;
+  int n = 0;
+};
+Quartiles QuartilesOf(std::vector<double> values);
+
+// A row of a group against that group's `none`.
+struct Sample {
+  const Group* group = nullptr;
+  const JobResult* row = nullptr;
+  double ratio = kNaN;  // tv_err / tv_err(none); NaN without `none`
+  Interval ratio_ci;    // [lo / hi(none), hi / lo(none)]: both intervals' worst cases
+  double energy_bias = kNaN;
+};
+const JobResult* NoneOf(const Group& group);
+std::vector<Sample> SamplesOf(const Group& group);
+
+// One variant label across the tables it appears in.
+struct VariantSummary {
+  std::string label;
+  bool supersample = false;
+  std::vector<Sample> samples;
+  Quartiles ratio;                          // over the tables
+  double ratio_lo = kNaN, ratio_hi = kNaN;  // medians of the per-table interval bounds
+  double energy_share = kNaN;               // share of tables with |energy_bias| <= kBiasTolerance
+  Quartiles energy_bias;
+  std::map<std::string, Quartiles> cost_ratio;  // benchmark ratio_to_none by device
+};
+// Sorted by median ratio (labels without a ratio last).
+std::vector<VariantSummary> Summarise(const std::vector<const Group*>& groups);
+// The benchmark devices of the rows, in name order.
+std::vector<std::string> BenchmarkDevices(const std::vector<const Group*>& groups);
+
+struct Recommendation {
+  std::string dimension;  // "roughness" or "geometry"
+  std::string name;       // the class
+  int tables = 0, shots = 0;
+  const VariantSummary* pick = nullptr;  // into `summaries`; null: keep `none`
+  const VariantSummary* runner_up = nullptr;
+  int better = 0, worse = 0, overlapping = 0, unknown = 0;  // pick against runner-up, per shared table
+  Verdict verdict = Verdict::kUnknown;
+  std::string note;  // why there is no pick
+  std::vector<VariantSummary> summaries;
+};
+// The rule (RecommendationRule() says it in words): among variants other than
+// `none` measured in at least 3/4 of the class's tables, those within
+// ±kBiasTolerance energy in at least 3/4 of theirs; the lowest median tv_err
+// ratio wins if below 1. supersample-N only when its median benchmark cost
+// ratio is known and at most the best filter's.
+std::vector<Recommendation> Recommend(const std::vector<const Group*>& groups);
+std::string RecommendationRule();
+// Pick against runner-up: kBetter when the pick's tv_err interval lies below
+// the runner-up's in at least half the shared tables and above in none;
+// kUnknown when no shared table has both intervals.
+Verdict ClassVerdict(int better, int worse, int overlapping);
+
+// Cost for a group's Pareto front: the benchmark's median ms when every row
+// has one from one device, else the metric render's time when every row ran
+// on one device, else none (ms empty: no front across devices).
 struct Costs {
+  std::string source;  // what `ms` is, in words
   std::vector<double> ms, tv_err, relmse;
   std::vector<bool> front_tv_err, front_relmse;
 };
@@ -33,14 +130,17 @@ std::string Label(const JobResult& row);
 // The metrics' region, e.g. "highlight" or "frame (highlight mask empty)".
 std::string Region(const JobResult& row);
 bool IsSupersample(const JobResult& row);
+std::string DeviceOf(const JobResult& row);  // "unrecorded" when empty
 
 std::string Csv(const std::vector<JobResult>& rows);
-std::string Markdown(const std::vector<Group>& groups, const std::string& title, std::size_t jobs);
 
 struct PlotFile {
   std::string name, text;
   bool script = false;  // a gnuplot script to run
 };
 std::vector<PlotFile> Plots(const Group& group);
+// Variants (leaderboard order) x tables: log10 of the tv_err ratio to `none`,
+// crossed where |energy_bias| > kBiasTolerance. Files "heatmap.*".
+std::vector<PlotFile> Heatmap(const std::vector<VariantSummary>& variants, const std::vector<const Group*>& groups);
 
 }  // namespace shimmer::experiments::report

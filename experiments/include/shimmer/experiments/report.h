@@ -1,6 +1,9 @@
-// Report tables and plots from a results store: report.md, report.csv, and
-// gnuplot scripts with their SVGs (speed against error with the Pareto front,
-// flicker spectra), written into one directory.
+// The report from a results store, written into one directory: report.md
+// (an overview across shots: leaderboard, heatmap, recommendation per
+// roughness and geometry class; then the per-shot tables), report.html (the
+// same on one self-contained page), report.csv, and gnuplot scripts with
+// their SVGs (heatmap, speed against error with the Pareto front, flicker
+// spectra).
 #pragma once
 
 #include <string>

@@ -1,0 +1,54 @@
+// The report as a sequence of blocks, built once from the rows and rendered
+// twice: as markdown (report.md) and as one self-contained HTML page
+// (report.html), so the two never say different things.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "report_parts.h"
+
+namespace shimmer::experiments::report {
+
+// Text in blocks uses a small inline markup that both renderers read:
+// `code`, **bold** and [text](relative-link).
+struct Block {
+  enum class Kind { kHeading, kParagraph, kList, kTable, kFigures };
+  Kind kind = Kind::kParagraph;
+  int level = 2;                    // headings
+  std::string text;                 // heading or paragraph
+  std::string id;                   // headings: the HTML anchor
+  std::vector<std::string> items;   // list items; figures: SVG file names
+  std::vector<std::string> header;  // tables
+  std::vector<std::vector<std::string>> cells;
+  std::vector<std::string> captions;  // figures: alt text, one per file
+};
+
+struct Document {
+  std::string title;
+  std::vector<Block> blocks;
+  void Heading(int level, const std::string& text);
+  void Paragraph(const std::string& text);
+  void List(std::vector<std::string> items);
+  void Table(std::vector<std::string> header, std::vector<std::vector<std::string>> cells);
+  void Figures(std::vector<std::string> files, std::vector<std::string> captions);
+};
+
+// The section headings every report has (the browser test looks for them).
+inline constexpr const char* kOverviewHeading = "Overview";
+inline constexpr const char* kLeaderboardHeading = "Leaderboard";
+inline constexpr const char* kHeatmapHeading = "Heatmap";
+inline constexpr const char* kRecommendationsHeading = "Recommendations";
+inline constexpr const char* kExcludedHeading = "Shots left out";
+inline constexpr const char* kShotsHeading = "Shots";
+inline constexpr const char* kMethodHeading = "Method";
+
+Document BuildDocument(const std::vector<Group>& groups, const std::string& title, std::size_t jobs);
+
+std::string ToMarkdown(const Document& doc);
+// `svg_of(file)` returns a figure's SVG text, or nullopt when it was not drawn.
+std::string ToHtml(const Document& doc, const std::function<std::optional<std::string>(const std::string&)>& svg_of);
+
+}  // namespace shimmer::experiments::report

@@ -1,0 +1,518 @@
+// The report from synthetic rows with known numbers: the overview's
+// statistics, the recommendation rule, interval verdicts, ordering, costs per
+// device, the CSV and the self-contained HTML page.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "report_document.h"
+#include "report_parts.h"
+#include "shimmer/experiments/csv.h"
+#include "shimmer/experiments/job.h"
+#include "shimmer/experiments/report.h"
+#include "shimmer/renderer/shading.h"
+
+namespace shimmer::experiments {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace report;
+
+struct TempDir {
+  fs::path path = fs::temp_directory_path() /
+                  ("shimmer-report-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" +
+                   ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  TempDir() { fs::remove_all(path), fs::create_directories(path); }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+std::string ReadText(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+JobResult MakeResult(const std::string& variant, double fp_max, double tv_ratio) {
+  JobResult r;
+  r.job.scene = "sphere";
+  r.job.material = "ggx:0.02";
+  r.job.camera = "orbit";
+  r.job.variant = variant;
+  r.job.params = {{"fp_max", fp_max}};
+  r.job.derivatives = "quad";
+  r.job.width = r.job.height = 32;
+  r.job.frames = 8;
+  r.job.fps = 30;
+  r.job.reference = {4, 0};
+  r.id = JobId(r.job);
+  r.reference_id = ReferenceId(r.job);
+  r.metrics = {{"tv_ratio", tv_ratio}, {"tv_err", 0.5}, {"flicker", {{"flicker_index", 0.25}}}};
+  r.gpu_ms_per_frame = 1.5;
+  r.revision = "abc";
+  r.core_version = ShadingCoreVersion();
+  return r;
+}
+
+// A row of shot (scene, material) with known tv_err and energy bias; `half`
+// > 0 gives tv_err a 95 % interval of ± half.
+JobResult Row(const std::string& scene, const std::string& material, const std::string& variant, double tv_err,
+              double bias, double half = 0) {
+  JobResult r;
+  r.job.scene = scene;
+  r.job.material = material;
+  r.job.camera = "orbit";
+  r.job.variant = variant;
+  r.job.derivatives = "quad";
+  r.job.reference = {4, 0};
+  r.metrics = {{"tv_err", tv_err}, {"energy_bias", bias}, {"tv_ratio", 1.0}, {"relmse", 0.1}};
+  if (half > 0) r.metrics["ci95"] = {{"tv_err", {tv_err - half, tv_err + half}}};
+  r.gpu_ms_per_frame = 1;
+  r.device = "dev";
+  return r;
+}
+
+void Bench(JobResult& r, double ratio, const std::string& device = "bench-gpu") {
+  BenchmarkCost c;
+  c.variant = r.job.variant, c.device = device, c.ratio_to_none = ratio;
+  c.median_ms = 2 * ratio, c.min_ms = 1.9 * ratio, c.max_ms = 2.2 * ratio, c.width = c.height = 512;
+  r.cost = c;
+}
+
+std::vector<const Group*> Pointers(const std::vector<Group>& groups) {
+  std::vector<const Group*> out;
+  for (const Group& g : groups) out.push_back(&g);
+  return out;
+}
+
+const VariantSummary& Find(const std::vector<VariantSummary>& all, const std::string& label) {
+  for (const VariantSummary& v : all)
+    if (v.label == label) return v;
+  throw std::runtime_error("no summary of " + label);
+}
+
+TEST(ReportStatistics, QuartilesInterpolateBetweenOrderStatistics) {
+  const Quartiles q = QuartilesOf({3, 1, std::nan(""), 2});
+  EXPECT_EQ(q.n, 3);
+  EXPECT_DOUBLE_EQ(q.median, 2);
+  EXPECT_DOUBLE_EQ(q.q1, 1.5);
+  EXPECT_DOUBLE_EQ(q.q3, 2.5);
+  EXPECT_TRUE(std::isnan(QuartilesOf({}).median));
+}
+
+TEST(ReportStatistics, AlphaAndClasses) {
+  EXPECT_DOUBLE_EQ(AlphaOf("ggx:0.02"), 0.02);
+  EXPECT_NEAR(AlphaOf("ggx:0.1,0.02"), std::sqrt(0.1 * 0.02), 1e-12);
+  EXPECT_TRUE(std::isnan(AlphaOf("not a material")));
+  EXPECT_EQ(RoughnessClass(0.02), "α ≤ 0.02");
+  EXPECT_EQ(RoughnessClass(0.05), "0.02 < α ≤ 0.1");
+  EXPECT_EQ(RoughnessClass(0.3), "0.1 < α ≤ 0.3");
+  EXPECT_EQ(RoughnessClass(0.5), "α > 0.3");
+  EXPECT_EQ(GeometryClass("sphere-field"), "small curved");
+  EXPECT_EQ(GeometryClass("wires"), "thin");
+  EXPECT_EQ(GeometryClass("bumpy-plane"), "flat with normal detail");
+  EXPECT_EQ(GeometryClass("my.json"), "other");
+}
+
+TEST(ReportStatistics, IntervalsCallBetterOnlyWhenSeparate) {
+  EXPECT_EQ(Compare({1, 2}, {3, 4}), Verdict::kBetter);
+  EXPECT_EQ(Compare({3, 4}, {1, 2}), Verdict::kWorse);
+  EXPECT_EQ(Compare({1, 3}, {2, 4}), Verdict::kIndistinguishable);
+  EXPECT_EQ(Compare({1, 2}, {}), Verdict::kUnknown);
+  EXPECT_EQ(ClassVerdict(2, 0, 2), Verdict::kBetter);
+  EXPECT_EQ(ClassVerdict(1, 0, 3), Verdict::kIndistinguishable);
+  EXPECT_EQ(ClassVerdict(3, 1, 0), Verdict::kIndistinguishable);
+  EXPECT_EQ(ClassVerdict(0, 0, 0), Verdict::kUnknown);
+  JobResult r = Row("sphere", "ggx:0.02", "tk21", 0.5, 0, 0.1);
+  EXPECT_DOUBLE_EQ(Ci95(r, "tv_err").lo, 0.4);
+  EXPECT_FALSE(Ci95(r, "relmse").Known());  // absent: no interval, not an error
+}
+
+// Four shots; tk21's ratios 0.1, 0.2, 0.4, 0.8 by hand: median 0.3, quartiles
+// 0.175 and 0.5; biases 0.05, -0.2, 0.1, 0 → 3/4 within 0.10; cost ratios
+// 1.2, 1.4, 1.0, 1.6 → median 1.3.
+TEST(ReportOverview, LeaderboardMediansQuartilesAndShares) {
+  std::vector<JobResult> rows;
+  const double ratio[] = {0.1, 0.2, 0.4, 0.8}, bias[] = {0.05, -0.2, 0.1, 0}, cost[] = {1.2, 1.4, 1.0, 1.6};
+  const char* materials[] = {"ggx:0.01", "ggx:0.05", "ggx:0.2", "ggx:0.5"};
+  for (int i = 0; i < 4; ++i) {
+    rows.push_back(Row("sphere", materials[i], "none", 2.0, 0.01));
+    Bench(rows.back(), 1.0);
+    rows.push_back(Row("sphere", materials[i], "tk21", 2.0 * ratio[i], bias[i]));
+    Bench(rows.back(), cost[i]);
+    rows.push_back(Row("sphere", materials[i], "vlachos15", 4.0, 0));
+  }
+  const std::vector<Group> groups = GroupRows(rows);
+  ASSERT_EQ(groups.size(), 4u);
+  const auto summaries = Summarise(Pointers(groups));
+  ASSERT_EQ(summaries.size(), 3u);
+  EXPECT_EQ(summaries[0].label, "tk21");  // sorted by median ratio
+  EXPECT_EQ(summaries[1].label, "none");
+  EXPECT_EQ(summaries[2].label, "vlachos15");
+  const VariantSummary& tk21 = summaries[0];
+  EXPECT_EQ(tk21.ratio.n, 4);
+  EXPECT_NEAR(tk21.ratio.median, 0.3, 1e-12);
+  EXPECT_NEAR(tk21.ratio.q1, 0.175, 1e-12);
+  EXPECT_NEAR(tk21.ratio.q3, 0.5, 1e-12);
+  EXPECT_DOUBLE_EQ(tk21.energy_share, 0.75);
+  ASSERT_EQ(tk21.cost_ratio.count("bench-gpu"), 1u);
+  EXPECT_NEAR(tk21.cost_ratio.at("bench-gpu").median, 1.3, 1e-12);
+  EXPECT_TRUE(Find(summaries, "vlachos15").cost_ratio.empty());
+  const std::string md = ToMarkdown(BuildDocument(groups, "t", rows.size()));
+  EXPECT_NE(md.find("| `tk21` | 4 | 0.3 (IQR 0.175–0.5) | n/a | 75 % | 1.30 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| `vlachos15` | 4 | 2 (IQR 2–2) | n/a | 100 % | n/a |"), std::string::npos) << md;
+  // The overview comes first, the per-shot tables after it.
+  EXPECT_LT(md.find("## Overview"), md.find("### Leaderboard"));
+  EXPECT_LT(md.find("### Recommendations"), md.find("## Shots"));
+}
+
+// Per class: the lowest median ratio among variants that keep energy; a
+// flattening filter and an expensive supersample-N never win.
+TEST(ReportOverview, RecommendationPicksPerClass) {
+  std::vector<JobResult> rows;
+  for (const char* material : {"ggx:0.01", "ggx:0.015"})
+    for (const char* camera : {"orbit", "dolly"}) {
+      auto add = [&](const char* v, double err, double bias, double cost) {
+        rows.push_back(Row("sphere", material, v, err, bias));
+        rows.back().job.camera = camera;
+        Bench(rows.back(), cost);
+      };
+      add("none", 1.0, 0.0, 1.0);
+      add("tk21", 0.2, 0.05, 1.1);            // the pick
+      add("k16-ggx-proxy", 0.05, -0.5, 1.0);  // lowest, but flattens the highlight
+      add("toksvig-quad", 0.5, 0.0, 1.0);     // runner-up
+      add("supersample-4", 0.1, 0.0, 4.0);    // steadier, at four times the cost
+    }
+  for (const char* camera : {"orbit", "dolly"}) {
+    auto add = [&](const char* v, double err, double bias) {
+      rows.push_back(Row("wires", "ggx:0.5", v, err, bias));
+      rows.back().job.camera = camera;
+    };
+    add("none", 1.0, 0.0);
+    add("tk21", 0.2, 0.3);  // out of energy here
+    add("toksvig-quad", 0.6, 0.02);
+  }
+  const std::vector<Group> groups = GroupRows(rows);
+  const auto recs = Recommend(Pointers(groups));
+  std::map<std::string, const Recommendation*> by_name;
+  for (const Recommendation& r : recs) by_name[r.dimension + ": " + r.name] = &r;
+  ASSERT_EQ(by_name.size(), 4u);
+  const Recommendation* smooth = by_name.at("roughness: α ≤ 0.02");
+  ASSERT_NE(smooth->pick, nullptr);
+  EXPECT_EQ(smooth->pick->label, "tk21");
+  EXPECT_NEAR(smooth->pick->ratio.median, 0.2, 1e-12);
+  EXPECT_EQ(smooth->tables, 4);
+  EXPECT_EQ(smooth->shots, 4);
+  ASSERT_NE(smooth->runner_up, nullptr);
+  EXPECT_EQ(smooth->runner_up->label, "toksvig-quad");
+  EXPECT_EQ(smooth->verdict, Verdict::kUnknown);  // no intervals in these rows
+  EXPECT_EQ(by_name.at("geometry: small curved")->pick->label, "tk21");
+  ASSERT_NE(by_name.at("roughness: α > 0.3")->pick, nullptr);
+  EXPECT_EQ(by_name.at("roughness: α > 0.3")->pick->label, "toksvig-quad");
+  EXPECT_EQ(by_name.at("geometry: thin")->pick->label, "toksvig-quad");
+  EXPECT_EQ(by_name.at("geometry: thin")->runner_up, nullptr);
+
+  // A supersample-N no costlier than the best filter takes the pick.
+  for (JobResult& r : rows)
+    if (r.job.variant == "supersample-4") r.cost->ratio_to_none = 1.05;
+  const std::vector<Group> cheap = GroupRows(rows);
+  const auto recs2 = Recommend(Pointers(cheap));
+  EXPECT_EQ(recs2.front().name, "α ≤ 0.02");
+  ASSERT_NE(recs2.front().pick, nullptr);
+  EXPECT_EQ(recs2.front().pick->label, "supersample-4");
+}
+
+// Intervals decide the verdict: overlapping → indistinguishable, separate → better.
+TEST(ReportOverview, PickAgainstRunnerUpByIntervals) {
+  auto rows_with = [](double half) {
+    std::vector<JobResult> rows;
+    for (const char* camera : {"orbit", "dolly"}) {
+      for (auto [v, err] : {std::pair<const char*, double>{"none", 1.0}, {"tk21", 0.20}, {"toksvig-quad", 0.25}}) {
+        rows.push_back(Row("sphere", "ggx:0.01", v, err, 0.0, half));
+        rows.back().job.camera = camera;
+      }
+    }
+    return rows;
+  };
+  for (auto [half, verdict, word] :
+       {std::tuple<double, Verdict, const char*>{0.04, Verdict::kIndistinguishable,
+                                                 "indistinguishable (lower in 0, overlapping in 2"},
+        {0.01, Verdict::kBetter, "better (lower in 2, overlapping in 0"}}) {
+    const std::vector<JobResult> rows = rows_with(half);
+    const std::vector<Group> groups = GroupRows(rows);
+    const auto recs = Recommend(Pointers(groups));
+    ASSERT_FALSE(recs.empty());
+    ASSERT_NE(recs.front().pick, nullptr);
+    EXPECT_EQ(recs.front().pick->label, "tk21");
+    EXPECT_EQ(recs.front().verdict, verdict) << half;
+    const std::string md = ToMarkdown(BuildDocument(groups, "t", rows.size()));
+    EXPECT_NE(md.find(word), std::string::npos) << md;
+    // Per-shot tables: the runner-up's row against the shot's best.
+    EXPECT_NE(md.find(half > 0.02 ? "| ≈ indistinguishable |" : "| higher |"), std::string::npos) << md;
+    if (half > 0.02) EXPECT_NE(md.find("| 0.2 [0.16, 0.24] | 0.2 |"), std::string::npos) << md;
+  }
+}
+
+TEST(ReportOverview, UnconvergedShotIsLeftOutAndListed) {
+  std::vector<JobResult> rows;
+  for (const char* material : {"ggx:0.01", "ggx:0.5", "ggx:0.2"}) {
+    rows.push_back(Row("sphere", material, "none", 1.0, 0.0));
+    rows.push_back(Row("sphere", material, "tk21", std::string(material) == "ggx:0.5" ? 0.9 : 0.1, 0.0));
+  }
+  ShotCheck ok, bad;
+  ok.converged = true, ok.spp = 8, ok.check_spp = 16;
+  bad.converged = false, bad.spp = 8, bad.check_spp = 16, bad.d_tv_ref = 0.25, bad.d_energy_bias = 0.001;
+  bad.d_tv_err = 0.3, bad.unconverged_pixels = 42;
+  for (JobResult& r : rows) {
+    if (r.job.material == "ggx:0.5") r.shot = bad;
+    if (r.job.material == "ggx:0.01") r.shot = ok;
+  }
+  const std::vector<Group> groups = GroupRows(rows);
+  std::vector<const Group*> included;
+  for (const Group& g : groups)
+    if (ConvergenceOf(g) != Convergence::kUnconverged) included.push_back(&g);
+  EXPECT_EQ(included.size(), 2u);
+  const auto summaries = Summarise(included);
+  EXPECT_EQ(Find(summaries, "tk21").ratio.n, 2);
+  EXPECT_NEAR(Find(summaries, "tk21").ratio.median, 0.1, 1e-12);  // 0.9 of the unconverged shot left out
+  const std::string md = ToMarkdown(BuildDocument(groups, "t", rows.size()));
+  const std::size_t left_out = md.find("### Shots left out");
+  ASSERT_NE(left_out, std::string::npos);
+  EXPECT_NE(md.find("- **unconverged** sphere / ggx:0.5 / orbit: spp 8 vs 16 per axis; changes: tv_ref 0.25 "
+                    "(tolerance 0.1), energy_bias 0.001 (tolerance 0.02), tv_err 0.3 (tolerance 0.1); 42 pixel-frames",
+                    left_out),
+            std::string::npos)
+      << md;
+  EXPECT_NE(
+      md.find("**unchecked** (no convergence check in the store; kept in the overview): sphere / ggx:0.2 / orbit"),
+      std::string::npos)
+      << md;
+  EXPECT_NE(md.find("Reference: **unconverged**, left out of the overview"), std::string::npos);
+}
+
+TEST(ReportTables, OrderedBySceneThenAlpha) {
+  std::vector<JobResult> rows;
+  // Alphabetical order would put beckmann:0.3 first and ggx:0.1,0.02 (α 0.045) after ggx:0.05.
+  for (const char* material : {"beckmann:0.3", "ggx:0.05", "ggx:0.1,0.02", "ggx:0.2"})
+    for (const char* scene : {"wires", "bumpy-plane"}) rows.push_back(Row(scene, material, "none", 1.0, 0.0));
+  const std::vector<Group> groups = GroupRows(rows);
+  std::vector<std::string> keys;
+  for (const Group& g : groups) keys.push_back(g.key);
+  const std::vector<std::string> expected = {"bumpy-plane / ggx:0.1,0.02 / orbit / quad",
+                                             "bumpy-plane / ggx:0.05 / orbit / quad",
+                                             "bumpy-plane / ggx:0.2 / orbit / quad",
+                                             "bumpy-plane / beckmann:0.3 / orbit / quad",
+                                             "wires / ggx:0.1,0.02 / orbit / quad",
+                                             "wires / ggx:0.05 / orbit / quad",
+                                             "wires / ggx:0.2 / orbit / quad",
+                                             "wires / beckmann:0.3 / orbit / quad"};
+  EXPECT_EQ(keys, expected);
+  const std::string md = ToMarkdown(BuildDocument(groups, "t", rows.size()));
+  EXPECT_LT(md.find("### bumpy-plane / ggx:0.2 / orbit / quad"), md.find("### bumpy-plane / beckmann:0.3 / orbit"));
+}
+
+// Benchmarks from two devices: one cost column per device, never a ratio mixing them.
+TEST(ReportTables, CostsFromTwoDevicesStaySeparate) {
+  std::vector<JobResult> rows;
+  for (auto [material, device, ratio] :
+       {std::tuple<const char*, const char*, double>{"ggx:0.01", "gpu-a", 1.5}, {"ggx:0.02", "gpu-b", 3.0}}) {
+    rows.push_back(Row("sphere", material, "none", 1.0, 0.0));
+    Bench(rows.back(), 1.0, device);
+    rows.push_back(Row("sphere", material, "tk21", 0.5, 0.0));
+    Bench(rows.back(), ratio, device);
+  }
+  // And one table whose rows were benchmarked on different devices.
+  rows.push_back(Row("wires", "ggx:0.01", "none", 1.0, 0.0));
+  Bench(rows.back(), 1.0, "gpu-a");
+  rows.push_back(Row("wires", "ggx:0.01", "tk21", 0.5, 0.0));
+  Bench(rows.back(), 2.0, "gpu-b");
+  rows.back().device = "other";
+  const std::vector<Group> groups = GroupRows(rows);
+  const auto summaries = Summarise(Pointers(groups));
+  const VariantSummary& tk21 = Find(summaries, "tk21");
+  ASSERT_EQ(tk21.cost_ratio.size(), 2u);
+  EXPECT_NEAR(tk21.cost_ratio.at("gpu-a").median, 1.5, 1e-12);
+  EXPECT_NEAR(tk21.cost_ratio.at("gpu-b").median, 2.5, 1e-12);  // 3.0 and 2.0, both measured on gpu-b
+  const std::string md = ToMarkdown(BuildDocument(groups, "t", rows.size()));
+  EXPECT_NE(md.find("| cost ×none on gpu-a | cost ×none on gpu-b |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| `tk21` | 3 | 0.5 (IQR 0.5–0.5) | n/a | 100 % | 1.50 | 2.50 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| bench device |"), std::string::npos);
+  EXPECT_NE(md.find("Pareto cost: none: the rows ran on several devices"), std::string::npos);
+  const Costs one_device = CostsOf(groups.front());
+  EXPECT_EQ(one_device.ms, (std::vector<double>{2.0, 3.0}));  // benchmark median ms, not the render's
+}
+
+TEST(Report, ParetoFrontKeepsOnlyUndominatedPoints) {
+  // (cost, error): b dominates c; a is cheapest; d is most accurate; e ties a's cost but is worse.
+  const std::vector<double> cost{1, 2, 3, 5, 1};
+  const std::vector<double> error{10, 5, 6, 1, 11};
+  EXPECT_EQ(ParetoFront(cost, error), (std::vector<int>{0, 1, 3}));
+}
+// An RFC 4180 reader written apart from the writer: quoted fields may hold
+// commas, doubled quotes and line breaks; records end in CRLF or LF.
+std::vector<std::vector<std::string>> ParseCsv(const std::string& text) {
+  std::vector<std::vector<std::string>> records(1);
+  std::string field;
+  bool quoted = false, field_started = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"')
+        field += '"', ++i;
+      else if (c == '"')
+        quoted = false;
+      else
+        field += c;
+    } else if (c == '"' && !field_started) {
+      quoted = field_started = true;
+    } else if (c == ',') {
+      records.back().push_back(field), field.clear(), field_started = false;
+    } else if (c == '\r' || c == '\n') {
+      if (c == '\r' && i + 1 < text.size() && text[i + 1] == '\n') ++i;
+      records.back().push_back(field), field.clear(), field_started = false;
+      records.emplace_back();
+    } else {
+      field += c, field_started = true;
+    }
+  }
+  if (field_started || !records.back().empty()) records.back().push_back(field);
+  if (records.back().empty()) records.pop_back();
+  return records;
+}
+
+TEST(Csv, FieldsWithCommasQuotesAndNewlinesReadBackAsWritten) {
+  const std::vector<std::string> header = {"name", "params", "note"};
+  const std::vector<std::vector<std::string>> rows = {{"tk19", "{\"kappa\":0.18,\"sigma2\":0.25}", "plain"},
+                                                      {"a,b", "say \"hi\"", "two\nlines"},
+                                                      {"", "trailing space ", "\"\""}};
+  CsvTable table(header);
+  for (const auto& r : rows) table.AddRow(r);
+  const auto read = ParseCsv(table.Text());
+  ASSERT_EQ(read.size(), 1 + rows.size()) << table.Text();
+  EXPECT_EQ(read[0], header);
+  for (std::size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(read[i + 1], rows[i]) << i;
+  EXPECT_EQ(CsvNumber(std::nan("")), "");
+  EXPECT_THROW(table.AddRow({"short"}), std::logic_error);
+}
+
+TEST(Report, WritesTablesCsvAndPlotScripts) {
+  TempDir dir;
+  std::vector<JobResult> rows;
+  for (const char* v : {"none", "tk19", "supersample-2"}) {
+    JobResult r = MakeResult(v, 1.0, 2.0);
+    r.metrics["flicker"] = {{"flicker_index", 0.1}, {"freq_hz", {0.0, 7.5, 15.0}}, {"psd", {1e-3, 2e-3, 0.0}}};
+    rows.push_back(r);
+  }
+  std::vector<std::string> warnings;
+  rows[1].job.params = {{"kappa", 0.18}, {"sigma2", 0.25}};  // a JSON field with a comma and quotes
+  rows[1].metrics["region"] = "highlight";
+  for (JobResult& r : rows) r.device = "gpu, \"fast\"";  // one device: the Pareto plots compare its times
+  ASSERT_TRUE(WriteReport(rows, "t", (dir.path / "rep").string(), &warnings));
+  std::ifstream csv_in(dir.path / "rep" / "report.csv", std::ios::binary);
+  const auto csv = ParseCsv(std::string((std::istreambuf_iterator<char>(csv_in)), {}));
+  ASSERT_EQ(csv.size(), 4u);
+  // The original columns first, in their order; intervals, convergence and benchmark after them.
+  const std::vector<std::string> header = {
+      "scene",    "material", "camera",      "variant",           "params", "derivatives",   "region",
+      "tv_ratio", "tv_err",   "energy_bias", "temporal_diff_err", "relmse", "flicker_index", "ms_per_frame",
+      "device",   "driver"};
+  ASSERT_GE(csv[0].size(), header.size());
+  EXPECT_EQ(std::vector<std::string>(csv[0].begin(), csv[0].begin() + header.size()), header);
+  for (const char* added : {"tv_err_lo", "tv_err_hi", "flicker_index_hi", "tv_err_floor", "reference", "d_tv_ref",
+                            "bench_median_ms", "bench_ratio_to_none", "bench_device"})
+    EXPECT_NE(std::find(csv[0].begin(), csv[0].end(), added), csv[0].end()) << added;
+  const std::vector<std::string>* tk19 = nullptr;
+  for (const auto& record : csv) {
+    EXPECT_EQ(record.size(), csv[0].size());
+    if (record[3] == "tk19") tk19 = &record;
+  }
+  ASSERT_NE(tk19, nullptr);
+  EXPECT_EQ(nlohmann::json::parse((*tk19)[4]), nlohmann::json(rows[1].job.params));
+  EXPECT_EQ((*tk19)[6], "highlight");
+  EXPECT_EQ((*tk19)[14], rows[1].device);
+  std::ifstream md(dir.path / "rep" / "report.md");
+  std::string text((std::istreambuf_iterator<char>(md)), {});
+  EXPECT_NE(text.find("## Overview"), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_pareto_tv_err.gp"));
+  EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_pareto_relmse.gp"));
+  EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp"));
+  EXPECT_NE(text.find("| `tk19 kappa=0.18 sigma2=0.25` | highlight |"), std::string::npos) << text;
+  // Scripts name their outputs by the final names: rerunning one rebuilds its plot.
+  std::ifstream gp(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp");
+  std::string script((std::istreambuf_iterator<char>(gp)), {});
+  EXPECT_NE(script.find("set output 'sphere___ggx_0_02___orbit___quad_spectra.svg'"), std::string::npos) << script;
+  EXPECT_NE(script.find("noenhanced"), std::string::npos);
+  for (const auto& e : fs::directory_iterator(dir.path / "rep"))  // no staging left behind
+    EXPECT_NE(e.path().filename().string().front(), '.') << e.path();
+  EXPECT_FALSE(WriteReport({}, "t", (dir.path / "empty").string(), &warnings));
+  EXPECT_FALSE(fs::exists(dir.path / "empty"));
+}
+
+// The spectra of a group of twenty variants: twenty different line styles,
+// where gnuplot's own cycle repeats after eight.
+TEST(Report, SpectraOfManyVariantsLookDifferent) {
+  TempDir dir;
+  std::vector<JobResult> rows;
+  for (int i = 0; i < 20; ++i) {
+    JobResult r = MakeResult("k16-beckmann-rect", 0.05 * (i + 1), 2.0);
+    r.metrics["flicker"] = {{"flicker_index", 0.1}, {"freq_hz", {0.0, 7.5}}, {"psd", {1e-3, 2e-3}}};
+    rows.push_back(r);
+  }
+  std::vector<std::string> warnings;
+  ASSERT_TRUE(WriteReport(rows, "t", (dir.path / "rep").string(), &warnings));
+  std::ifstream gp(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp");
+  std::set<std::string> styles;
+  for (std::string line; std::getline(gp, line);) {
+    const auto lc = line.find("lc rgb");
+    const auto title = line.find(" title ");
+    if (lc != std::string::npos && title != std::string::npos) styles.insert(line.substr(lc, title - lc));
+  }
+  EXPECT_EQ(styles.size(), 20u);
+}
+
+// report.html holds what report.md holds, on one page that needs nothing
+// else: every plot inlined, no script, no external reference.
+TEST(Report, HtmlIsSelfContained) {
+  TempDir dir;
+  std::vector<JobResult> rows;
+  for (const char* material : {"ggx:0.01", "ggx:0.5"})
+    for (auto [v, err, bias] : {std::tuple<const char*, double, double>{"none", 1.0, 0.0},
+                                {"tk21", 0.3, 0.02},
+                                {"vlachos15", 0.1, -0.4},
+                                {"supersample-2", 0.5, 0.0}}) {
+      rows.push_back(Row("sphere", material, v, err, bias, 0.05));
+      rows.back().metrics["flicker"] = {
+          {"flicker_index", err}, {"freq_hz", {0.0, 7.5, 15.0}}, {"psd", {1e-3, 2e-3, 1e-4}}};
+      Bench(rows.back(), 1.0 + err);
+    }
+  std::vector<std::string> warnings;
+  ASSERT_TRUE(WriteReport(rows, "Self <contained>", (dir.path / "rep").string(), &warnings));
+  const std::string html = ReadText(dir.path / "rep" / "report.html");
+  const std::string md = ReadText(dir.path / "rep" / "report.md");
+  ASSERT_FALSE(html.empty());
+  EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+  for (const char* external : {"src=\"http", "href=\"http", "src='http", "href='http", "<script", "<link", "@import"})
+    EXPECT_EQ(html.find(external), std::string::npos) << external;
+  EXPECT_NE(html.find("<title>Self &lt;contained&gt;</title>"), std::string::npos);
+  for (const char* section : {kOverviewHeading, kLeaderboardHeading, kHeatmapHeading, kRecommendationsHeading,
+                              kExcludedHeading, kShotsHeading, kMethodHeading}) {
+    EXPECT_NE(html.find(">" + std::string(section) + "</h"), std::string::npos) << section;
+    EXPECT_NE(md.find("# " + std::string(section) + "\n"), std::string::npos) << section;
+  }
+  EXPECT_NE(html.find("<code>tk21</code>"), std::string::npos);
+  if (fs::exists(dir.path / "rep" / "heatmap.svg")) {  // gnuplot installed: the plots are inlined, not linked
+    EXPECT_NE(html.find("<svg"), std::string::npos);
+    EXPECT_EQ(html.find("<?xml"), std::string::npos);
+    EXPECT_EQ(html.find("<img"), std::string::npos);
+    EXPECT_EQ(html.find("was not drawn"), std::string::npos);
+  } else {
+    GTEST_LOG_(INFO) << "gnuplot missing: plots not checked";
+  }
+  // The heatmap crosses the filter that loses 40 % energy, in both shots.
+  const std::string crosses = ReadText(dir.path / "rep" / "heatmap_crosses.dat");
+  EXPECT_EQ(std::count(crosses.begin(), crosses.end(), '\n'), 3);
+}
+
+}  // namespace
+}  // namespace shimmer::experiments

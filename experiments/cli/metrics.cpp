@@ -38,6 +38,17 @@ void PrintOptional(const char* name, const std::optional<double>& v) {
     std::printf("%-18s undefined\n", name);
 }
 
+// A value and, when there is one, its 95 % interval beside it.
+void PrintWithInterval(const char* name, const std::optional<double>& v, const std::optional<m::Interval>& ci) {
+  if (!v) {
+    std::printf("%-18s undefined\n", name);
+    return;
+  }
+  std::printf("%-18s %.6g", name, *v);
+  if (ci) std::printf("  [%.4g, %.4g]", ci->lo, ci->hi);
+  std::printf("\n");
+}
+
 void PrintText(const m::MetricsReport& r) {
   std::printf("%d frames %dx%d at %g fps (%s), layer %s, region %s: %lld px", r.frames, r.width, r.height, r.fps,
               r.fps_source.c_str(), r.layer.c_str(), r.region.c_str(), r.pixels);
@@ -46,19 +57,25 @@ void PrintText(const m::MetricsReport& r) {
   std::printf("%-18s %.6g\n", "tv_test", r.tv_test);
   if (!r.reference.empty()) {
     PrintOptional("tv_ref", r.tv_ref);
-    PrintOptional("tv_err", r.tv_err);
-    PrintOptional("tv_ratio", r.tv_ratio);
-    PrintOptional("energy_bias", r.energy_bias);
+    const m::TileBlockStatistics::Intervals ci = r.ci95.value_or(m::TileBlockStatistics::Intervals{});
+    PrintWithInterval("tv_err", r.tv_err, ci.tv_err);
+    if (r.tv_err_floor) std::printf("%-18s %.3g of tv_err is the reference's noise\n", "tv_err_floor", *r.tv_err_floor);
+    PrintWithInterval("tv_ratio", r.tv_ratio, ci.tv_ratio);
+    PrintWithInterval("energy_bias", r.energy_bias, ci.energy_bias);
     PrintOptional("temporal_diff_err", r.temporal_diff_err);
     PrintOptional("rmse", r.rmse);
-    PrintOptional("relmse", r.relmse);
+    PrintWithInterval("relmse", r.relmse, ci.relmse);
   }
   std::printf("%-18s %.6g\n", "temporal_diff_test", r.temporal_diff_test);
   if (r.warp_err) std::printf("%-18s %.6g\n", "warp_err", *r.warp_err);
   const m::FlickerResult& f = r.flicker;
   std::printf("flicker of %s (Welch, L = %d, %d segments): 0-2 Hz %.4g | 2-8 Hz %.4g | 8-%g Hz %.4g\n",
               f.signal.c_str(), f.segment_length, f.segments, f.band_low, f.band_mid, r.fps / 2, f.band_high);
-  std::printf("%-18s %.6g\n", "flicker_index", f.flicker_index);
+  PrintWithInterval("flicker_index", f.flicker_index, r.ci95 ? r.ci95->flicker_index : std::nullopt);
+  if (r.bootstrap)
+    std::printf("95%% intervals: block bootstrap, %d replicates, blocks of %d frames, %dx%d tiles, seed %llu\n",
+                r.bootstrap->replicates, r.bootstrap->frame_block, r.bootstrap->tile, r.bootstrap->tile,
+                static_cast<unsigned long long>(r.bootstrap->seed));
 }
 
 void Run(const MetricsCliOptions& o) {

@@ -61,6 +61,11 @@ bool HasMotion(const LayerMap& layers) {
   return it != layers.end() && it->second.count("X") && it->second.count("Y");
 }
 
+bool HasStderr(const LayerMap& layers) {
+  auto it = layers.find("stderr");
+  return it != layers.end() && it->second.count("Y");
+}
+
 std::vector<std::string> LuminanceLayers(const LayerMap& layers) {
   std::vector<std::string> names;
   for (const auto& [name, components] : layers)
@@ -110,6 +115,7 @@ Result<LayerMap> ReadLayerMap(const fs::path& file, FrameSize* size) {
 struct FrameCheck {
   std::optional<std::string> problem;
   bool motion = false;
+  bool stderr_y = false;
 };
 FrameCheck CheckFrame(const fs::path& frame, const ExrSequence& seq) {
   FrameSize size;
@@ -126,12 +132,12 @@ FrameCheck CheckFrame(const fs::path& frame, const ExrSequence& seq) {
     for (const auto& [component, ref] : it->second) present.push_back(ref.name);
     return {frame.string() + ": layer '" + seq.layer + "' lacks channel R, G or B (has " + Join(present) + ")"};
   }
-  return {std::nullopt, HasMotion(*layers)};
+  return {std::nullopt, HasMotion(*layers), HasStderr(*layers)};
 }
 
 // One layer's luminance (and motion) from an open file.
 Result<LuminanceFrame> ReadLayer(const ExrInput& in, const fs::path& file, const std::string& layer, int width,
-                                 int height, bool with_motion) {
+                                 int height, bool with_motion, bool with_stderr = false) {
   using R = Result<LuminanceFrame>;
   LayerMap layers = MapLayers(in);
   auto it = layers.find(layer);
@@ -141,10 +147,11 @@ Result<LuminanceFrame> ReadLayer(const ExrInput& in, const fs::path& file, const
   const auto& components = it->second;
   const bool rgb = components.count("R") && components.count("G") && components.count("B");
   if (with_motion && !HasMotion(layers)) return R::Failure(file.string() + ": no motion.X/motion.Y channels");
+  if (with_stderr && !HasStderr(layers)) return R::Failure(file.string() + ": no stderr.Y channel");
 
   // Component planes to fill, grouped by part below.
   std::vector<std::pair<ChannelRef, cv::Mat*>> wanted;
-  cv::Mat r(height, width, CV_32F), g, b, mx, my;
+  cv::Mat r(height, width, CV_32F), g, b, mx, my, se;
   if (rgb) {
     g.create(height, width, CV_32F);
     b.create(height, width, CV_32F);
@@ -157,6 +164,10 @@ Result<LuminanceFrame> ReadLayer(const ExrInput& in, const fs::path& file, const
     my.create(height, width, CV_32F);
     wanted.push_back({layers.at("motion").at("X"), &mx});
     wanted.push_back({layers.at("motion").at("Y"), &my});
+  }
+  if (with_stderr) {
+    se.create(height, width, CV_32F);
+    wanted.push_back({layers.at("stderr").at("Y"), &se});
   }
   std::set<int> parts;
   for (const auto& w : wanted) parts.insert(w.first.part);
@@ -188,6 +199,7 @@ Result<LuminanceFrame> ReadLayer(const ExrInput& in, const fs::path& file, const
     frame.luminance = r;
   }
   if (with_motion) cv::merge(std::vector<cv::Mat>{mx, my}, frame.motion);
+  frame.stderr_y = se;
   return frame;
 }
 
@@ -276,6 +288,7 @@ Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& re
   seq.width = first.width;
   seq.height = first.height;
   seq.has_motion = HasMotion(*layers0);
+  seq.has_stderr = HasStderr(*layers0);
 
   // Headers are checked in parallel (a ~1 ms parse each, 128 of them for a
   // 64-frame pair); the first bad frame in sequence order is the one reported.
@@ -284,15 +297,16 @@ Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& re
   for (const FrameCheck& check : checks) {
     if (check.problem) return R::Failure(*check.problem);
     seq.has_motion = seq.has_motion && check.motion;
+    seq.has_stderr = seq.has_stderr && check.stderr_y;
   }
   return seq;
 }
 
 Result<LuminanceFrame> ReadFrame(const fs::path& file, const std::string& layer, int width, int height,
-                                 bool with_motion) {
+                                 bool with_motion, bool with_stderr) {
   auto in = ExrInput::Open(file, /*whole_file=*/true);
   if (!in) return Result<LuminanceFrame>::Failure(in.error());
-  return ReadLayer(*in, file, layer, width, height, with_motion);
+  return ReadLayer(*in, file, layer, width, height, with_motion, with_stderr);
 }
 
 Result<cv::Mat> ReadMask(const fs::path& file, int width, int height) {

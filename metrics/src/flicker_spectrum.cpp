@@ -39,6 +39,12 @@ FlickerSpectrum::FlickerSpectrum(std::vector<int> pixels, int segment_length, do
   density_scale_ = 1.0 / (fs_ * sum_w2);
 }
 
+void FlickerSpectrum::WeighPixels(std::vector<double> bin_weights) {
+  bin_weights_ = std::move(bin_weights);
+  pixel_power_.assign(pixels_.size(), 0.0);
+  pixel_segments_.assign(pixels_.size(), 0);
+}
+
 void FlickerSpectrum::AddFrame(const cv::Mat& signal, const cv::Mat& excluded) {
   CV_Assert(signal.type() == CV_32F && signal.isContinuous());
   float* slot = ring_.data() + static_cast<size_t>(frames_ % length_) * pixels_.size();
@@ -86,6 +92,15 @@ void FlickerSpectrum::AddSegment(int first_frame, const cv::Mat& excluded) {
         const cv::Vec2d* X = spectrum.ptr<cv::Vec2d>(r);
         for (int k = 0; k < bins; ++k) sums[k] += X[k][0] * X[k][0] + X[k][1] * X[k][1];
         ++used;
+        if (!bin_weights_.empty()) {
+          double power = 0;
+          for (int k = 0; k < bins; ++k) {
+            const bool mirrored = k != 0 && !(length_ % 2 == 0 && k == length_ / 2);
+            power += bin_weights_[k] * (mirrored ? 2.0 : 1.0) * (X[k][0] * X[k][0] + X[k][1] * X[k][1]);
+          }
+          pixel_power_[p0 + r] += power * density_scale_;
+          ++pixel_segments_[p0 + r];
+        }
       }
       block_counts[b] = used;
     }

@@ -1,5 +1,6 @@
 #include "shimmer/metrics/metrics_accumulator.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "shimmer/metrics/energy_bias.h"
@@ -13,6 +14,13 @@ namespace {
 // dominating (the convention of the rendering literature's relMSE, e.g.
 // Rousselle et al. 2011, with 0.01 as docs/metrics.md defines it).
 constexpr double kRelMseEpsilon = 0.01;
+
+// Per (frame block, region pixel): sum (T - t0), sum (R - r0), the squares of
+// those and of (E - e0), and sum E^2 / (R^2 + eps).
+constexpr int kCellSums = 6;
+
+// The two-sided 95 % normal quantile, for the reference noise's share of an interval.
+constexpr double kZ95 = 1.959963984540054;
 
 // Per-row partial sums of one frame: rows are the unit of parallel work, so
 // summing them in row order afterwards keeps results independent of threading.
@@ -62,12 +70,34 @@ MetricsAccumulator::MetricsAccumulator(const AccumulatorSetup& setup)
     moments_ref_ = TemporalMoments(setup.width, setup.height);
     moments_err_ = TemporalMoments(setup.width, setup.height);
     diff_err_ = cv::Mat::zeros(setup.height, setup.width, CV_64F);
+    region_index_.assign(static_cast<size_t>(setup.width) * setup.height, -1);
+    for (size_t p = 0; p < region_indices_.size(); ++p) region_index_[region_indices_[p]] = static_cast<int>(p);
+    block_length_ = FrameBlockLength(setup.frames);
+    for (int t = 0; t < setup.frames; t += block_length_)
+      block_frames_.push_back(std::min(block_length_, setup.frames - t));
+    cells_.assign(block_frames_.size() * region_indices_.size() * kCellSums, 0.f);
+    shifts_.assign(2 * region_indices_.size(), 0.f);
+    if (setup.reference_stderr) {
+      noise_.assign(region_indices_.size(), 0.0);
+      relmse_noise_.assign(region_indices_.size(), 0.0);
+    }
+    // The flicker weights of FlickerIndex, per bin, for the per-tile spectra.
+    std::vector<double> freq = WelchFrequencies(setup.segment_length, setup.fps), weights;
+    const double df = freq.size() > 1 ? freq[1] - freq[0] : 0.0;
+    for (double f : freq) weights.push_back(WatsonTemporalGain(f) * WatsonTemporalGain(f) * df);
+    spectrum_.WeighPixels(std::move(weights));
   }
 }
 
 void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv::Mat& motion,
-                                  const std::string& test_source, const std::string& reference_source) {
+                                  const std::string& test_source, const std::string& reference_source,
+                                  const cv::Mat& reference_stderr) {
   const bool has_ref = setup_.has_reference;
+  const bool with_stderr = has_ref && setup_.reference_stderr && !reference_stderr.empty();
+  if (with_stderr) ++stderr_frames_;
+  const size_t region_count = region_indices_.size();
+  const int block = has_ref ? std::min(frames_added_ / block_length_, static_cast<int>(block_frames_.size()) - 1) : 0;
+  float* block_cells = has_ref ? cells_.data() + static_cast<size_t>(block) * region_count * kCellSums : nullptr;
   const int width = setup_.width, height = setup_.height;
   const bool has_previous = frames_added_ > 0;
   std::vector<RowSums> rows(height);
@@ -77,6 +107,7 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
       const float* rv_row = has_ref ? Rf.ptr<float>(y) : nullptr;
       const float* tp_row = has_previous ? previous_test_.ptr<float>(y) : nullptr;
       const float* rp_row = has_previous && has_ref ? previous_ref_.ptr<float>(y) : nullptr;
+      const float* se_row = with_stderr ? reference_stderr.ptr<float>(y) : nullptr;
       const uint8_t* in = setup_.region.ptr<uint8_t>(y);
       uint8_t* bad = excluded_.ptr<uint8_t>(y);
       float* sig = signal_frame_.ptr<float>(y);
@@ -109,6 +140,27 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
         if (has_ref) {
           moments_ref_.Add(i, rv);
           moments_err_.Add(i, e);
+          const int p = region_index_[i];
+          if (frames_added_ == 0) {
+            shifts_[2 * p] = static_cast<float>(tv);
+            shifts_[2 * p + 1] = static_cast<float>(rv);
+          }
+          const double dt = tv - shifts_[2 * p], dr = rv - shifts_[2 * p + 1], de = dt - dr;
+          const double denominator = rv * rv + kRelMseEpsilon;
+          float* cell = block_cells + static_cast<size_t>(p) * kCellSums;
+          cell[0] += static_cast<float>(dt);
+          cell[1] += static_cast<float>(dr);
+          cell[2] += static_cast<float>(dt * dt);
+          cell[3] += static_cast<float>(dr * dr);
+          cell[4] += static_cast<float>(de * de);
+          cell[5] += static_cast<float>(e * e / denominator);
+          if (se_row && std::isfinite(se_row[x])) {
+            const double s2 = double(se_row[x]) * se_row[x];
+            noise_[p] += s2;
+            // d/dR of E^2 / (R^2 + eps), with E = T - R (the delta method).
+            const double slope = -2 * e / denominator - 2 * rv * e * e / (denominator * denominator);
+            relmse_noise_[p] += slope * slope * s2;
+          }
         }
         if (tp_row) {
           dt[x] += std::abs(tv - tp_row[x]);
@@ -145,6 +197,85 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
   T.copyTo(previous_test_);
   if (has_ref) Rf.copyTo(previous_ref_);
   ++frames_added_;
+}
+
+void MetricsAccumulator::AddIntervals(MetricsReport* report, const cv::Mat& good, double reference_sum) const {
+  const int blocks = static_cast<int>(block_frames_.size());
+  const size_t region_count = region_indices_.size();
+  const int tile = setup_.bootstrap.tile;
+  TileBlockStatistics cells(block_frames_);
+  const std::vector<double>& flicker_power = spectrum_.pixel_weighted_power();
+  const std::vector<int>& flicker_segments = spectrum_.pixel_segments();
+  std::vector<float> sums(static_cast<size_t>(kCellSums) * blocks);
+  double noise = 0, relmse_noise = 0;
+  long long used = 0;
+  // Only tiles that intersect the good region, each weighted by its pixels.
+  for (int ty = 0; ty < setup_.height; ty += tile)
+    for (int tx = 0; tx < setup_.width; tx += tile) {
+      int index = -1;
+      for (int y = ty; y < std::min(ty + tile, setup_.height); ++y)
+        for (int x = tx; x < std::min(tx + tile, setup_.width); ++x) {
+          if (!good.at<uint8_t>(y, x)) continue;
+          const int p = region_index_[static_cast<size_t>(y) * setup_.width + x];
+          if (index < 0) index = cells.AddTile();
+          for (int k = 0; k < blocks; ++k)
+            for (int s = 0; s < kCellSums; ++s)
+              sums[s * blocks + k] = cells_[(static_cast<size_t>(k) * region_count + p) * kCellSums + s];
+          cells.AddPixel(index, shifts_[2 * p], shifts_[2 * p + 1], &sums[0], &sums[blocks], &sums[2 * blocks],
+                         &sums[3 * blocks], &sums[4 * blocks], &sums[5 * blocks], flicker_power[p],
+                         flicker_segments[p]);
+          if (!noise_.empty()) {
+            noise += noise_[p];
+            relmse_noise += relmse_noise_[p];
+          }
+          ++used;
+        }
+    }
+
+  TileBlockStatistics::Estimates point;
+  point.tv_err = report->tv_err.value_or(0);
+  point.tv_ratio = report->tv_ratio;
+  point.energy_bias = report->energy_bias;
+  point.relmse = report->relmse.value_or(0);
+  point.flicker_index = report->flicker.flicker_index;
+  TileBlockStatistics::Intervals ci = cells.Bootstrap(point, setup_.bootstrap);
+  if (!report->tv_err) ci.tv_err.reset();
+  if (!report->relmse) ci.relmse.reset();
+  report->bootstrap = MetricsReport::Bootstrap{setup_.bootstrap.replicates, block_length_, tile, setup_.bootstrap.seed};
+
+  if (!noise_.empty() && stderr_frames_ == frames_added_ && used > 0) {
+    const double frames = frames_added_;
+    // Mean over M and t of stderr^2: what independent reference noise adds
+    // to the temporal variance of E (and of R).
+    const double floor = noise / (used * frames);
+    const double tv_err = report->tv_err.value_or(0);
+    report->tv_err_floor = tv_err > 0 ? std::min(floor / tv_err, 1.0) : (floor > 0 ? 1.0 : 0.0);
+    // Noise of a sum in quadrature with the bootstrap's half-widths.
+    auto widen = [](std::optional<Interval>& interval, double value, double sigma) {
+      if (!interval) return;
+      const double half = kZ95 * sigma;
+      interval->lo = value - std::hypot(value - interval->lo, half);
+      interval->hi = value + std::hypot(interval->hi - value, half);
+    };
+    if (ci.tv_err) ci.tv_err->lo = std::max(0.0, ci.tv_err->lo - floor);
+    if (ci.tv_ratio && report->tv_ref && *report->tv_ref > floor)
+      ci.tv_ratio->hi *= *report->tv_ref / (*report->tv_ref - floor);
+    if (ci.energy_bias && reference_sum != 0)
+      widen(ci.energy_bias, *report->energy_bias,
+            std::abs((1 + *report->energy_bias) / reference_sum) * std::sqrt(noise));
+    if (ci.relmse) widen(ci.relmse, *report->relmse, std::sqrt(relmse_noise) / (used * frames));
+    if (ci.flicker_index && setup_.signal == FlickerSignal::kError) {
+      // White noise of variance `floor` in E: its Welch density is flat, 2 floor / fs one-sided.
+      const FlickerResult& f = report->flicker;
+      std::vector<double> white(f.freq_hz.size());
+      for (size_t k = 0; k < white.size(); ++k) {
+        const bool mirrored = k != 0 && !(f.segment_length % 2 == 0 && int(k) == f.segment_length / 2);
+        white[k] = (mirrored ? 2.0 : 1.0) * floor / setup_.fps;
+      }
+      ci.flicker_index->lo = std::max(0.0, ci.flicker_index->lo - FlickerIndex(f.freq_hz, white));
+    }
+  }
+  report->ci95 = ci;
 }
 
 Status MetricsAccumulator::Finish(MetricsReport* report) {
@@ -210,6 +341,7 @@ Status MetricsAccumulator::Finish(MetricsReport* report) {
   f.band_mid = bands.mid;
   f.band_high = bands.high;
   f.flicker_index = FlickerIndex(f.freq_hz, f.psd);
+  if (has_ref) AddIntervals(report, good, MeanOver(moments_ref_.MeanMap(), good, 1) * frames);
   return Ok();
 }
 

@@ -68,7 +68,11 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
   // maps in double, the spectrum's L-frame ring in float, and two frame pairs
   // with motion being read and computed. Refused up front, with the numbers,
   // rather than found by the OOM killer on a huge sequence.
-  const double bytes_per_pixel = 3 * 16 + 2 * 8 + 4.0 * segment_length + 2 * (2 * 4 + 8) + 8;
+  // With a reference, the bootstrap's six float sums per frame block, the
+  // first-frame shifts, and stderr.Y's two sums and its plane.
+  const int frame_blocks = (frames + FrameBlockLength(frames) - 1) / FrameBlockLength(frames);
+  const double bytes_per_pixel = 3 * 16 + 2 * 8 + 4.0 * segment_length + 2 * (2 * 4 + 8) + 8 +
+                                 (has_ref ? 24.0 * frame_blocks + 8 + 16 + 2 * 4 : 0.0);
   const double needed = bytes_per_pixel * double(width) * double(height);
   if (const double available = double(AvailableHostMemory()); available > 0 && needed > available) {
     char text[256];
@@ -117,6 +121,7 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
   setup.region = region;
   setup.signal = signal;
   setup.segment_length = segment_length;
+  setup.reference_stderr = has_ref && reference->has_stderr;
   MetricsAccumulator accumulator(setup);
 
   // The next frame pair is read (its chunks decoded in parallel) while this
@@ -129,7 +134,7 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
     if (!tf) return tf.failure();
     pair.test = std::move(*tf);
     if (has_ref) {
-      auto rf = ReadFrame(reference->frames[t], reference->layer, width, height, false);
+      auto rf = ReadFrame(reference->frames[t], reference->layer, width, height, false, setup.reference_stderr);
       if (!rf) return rf.failure();
       pair.reference = std::move(*rf);
     }
@@ -151,7 +156,7 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
     const cv::Mat& T = current->test.luminance;
     const cv::Mat& Rf = current->reference.luminance;
     accumulator.AddFrame(T, Rf, current->test.motion, test->frames[t].string(),
-                         has_ref ? reference->frames[t].string() : std::string());
+                         has_ref ? reference->frames[t].string() : std::string(), current->reference.stderr_y);
     if (observer) {
       Status s =
           observer(ObservedFrame{t, test->fps, has_ref, T, has_ref ? Rf : (t > 0 ? previous.test.luminance : T)});
@@ -198,6 +203,20 @@ nlohmann::json ToJson(const MetricsReport& r) {
     j["rmse"] = optional(r.rmse);
     j["relmse"] = optional(r.relmse);
   }
+  if (r.ci95) {
+    auto interval = [](const std::optional<Interval>& i) { return i ? json::array({i->lo, i->hi}) : json(nullptr); };
+    j["ci95"] = {{"tv_err", interval(r.ci95->tv_err)},
+                 {"tv_ratio", interval(r.ci95->tv_ratio)},
+                 {"energy_bias", interval(r.ci95->energy_bias)},
+                 {"relmse", interval(r.ci95->relmse)},
+                 {"flicker_index", interval(r.ci95->flicker_index)}};
+  }
+  if (r.bootstrap)
+    j["bootstrap"] = {{"replicates", r.bootstrap->replicates},
+                      {"frame_block", r.bootstrap->frame_block},
+                      {"tile", r.bootstrap->tile},
+                      {"seed", r.bootstrap->seed}};
+  if (r.tv_err_floor) j["tv_err_floor"] = *r.tv_err_floor;
   if (r.warp_err) j["warp_err"] = *r.warp_err;
   j["flicker"] = {
       {"signal", r.flicker.signal},

@@ -37,6 +37,7 @@ struct ExrSequence {
   std::string layer;                // chosen layer, "beauty" for unprefixed R,G,B
   std::vector<std::string> layers;  // every layer with luminance in frame 0
   bool has_motion = false;          // every frame has motion.X and motion.Y
+  bool has_stderr = false;          // every frame has stderr.Y (shimmer's references)
   std::vector<std::string> warnings;
 };
 
@@ -47,11 +48,12 @@ Result<ExrSequence> OpenSequence(const std::filesystem::path& path, const Sequen
 struct LuminanceFrame {
   cv::Mat luminance;  // CV_32F, height x width, linear
   cv::Mat motion;     // CV_32FC2 (x, y) in pixels towards the previous frame; empty if not read
+  cv::Mat stderr_y;   // CV_32F standard error of the luminance (stderr.Y); empty if not read
 };
 
-// Reads one frame's luminance of `layer` (and motion.X/Y when asked).
+// Reads one frame's luminance of `layer` (and motion.X/Y, stderr.Y when asked).
 Result<LuminanceFrame> ReadFrame(const std::filesystem::path& file, const std::string& layer, int width, int height,
-                                 bool with_motion);
+                                 bool with_motion, bool with_stderr = false);
 
 // Any single-channel image used as a mask (EXR or anything OpenCV reads):
 // nonzero = inside. Returned as CV_8U 0/1.

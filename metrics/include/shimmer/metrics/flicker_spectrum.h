@@ -47,6 +47,14 @@ class FlickerSpectrum {
   // the first segment completes.
   std::vector<double> Psd() const;
 
+  // Also keeps, per tracked pixel, sum_k weight_k psd_k over its segments
+  // (its own one-sided densities, before the average over pixels) and how
+  // many segments it entered: the per-tile flicker_index the bootstrap
+  // resamples. Call before the first frame.
+  void WeighPixels(std::vector<double> bin_weights);
+  const std::vector<double>& pixel_weighted_power() const { return pixel_power_; }
+  const std::vector<int>& pixel_segments() const { return pixel_segments_; }
+
  private:
   void AddSegment(int first_frame, const cv::Mat& excluded);
 
@@ -60,6 +68,8 @@ class FlickerSpectrum {
   int frames_ = 0;
   int segments_ = 0;
   std::vector<double> psd_sum_;  // sum over segments of pixel-mean densities
+  std::vector<double> bin_weights_, pixel_power_;
+  std::vector<int> pixel_segments_;
 };
 
 // One series through the same code (tests, and users with a single probe).

@@ -24,7 +24,9 @@ struct AccumulatorSetup {
   bool with_motion = false;  // the test frames carry motion vectors (warp error)
   cv::Mat region;            // CV_8U 0/1: the pixels measured
   FlickerSignal signal = FlickerSignal::kTest;
-  int segment_length = 0;  // Welch segment, 2..frames
+  int segment_length = 0;         // Welch segment, 2..frames
+  bool reference_stderr = false;  // every reference frame comes with stderr.Y
+  BootstrapSettings bootstrap;
 };
 
 class MetricsAccumulator {
@@ -33,9 +35,11 @@ class MetricsAccumulator {
 
   // Frame t, in order: luminance planes (CV_32F), `reference` empty without a
   // reference, `motion` (CV_32FC2) empty without motion. The sources name the
-  // frames in the warning about the first NaN or Inf.
+  // frames in the warning about the first NaN or Inf. `reference_stderr`
+  // (CV_32F): the reference's per-pixel standard error, with
+  // setup.reference_stderr.
   void AddFrame(const cv::Mat& test, const cv::Mat& reference, const cv::Mat& motion, const std::string& test_source,
-                const std::string& reference_source = {});
+                const std::string& reference_source = {}, const cv::Mat& reference_stderr = cv::Mat());
 
   // Writes every metric, map and flicker result into `report`, and its
   // warnings; fails when every pixel of the region had a non-finite sample.
@@ -57,6 +61,17 @@ class MetricsAccumulator {
   std::string first_non_finite_;
   std::vector<double> energy_bias_per_frame_, rmse_per_frame_;
   double relmse_sum_ = 0;
+
+  // The bootstrap's per-pixel, per-frame-block sums (with a reference):
+  // kCellSums floats per (block, region pixel), block-major.
+  void AddIntervals(MetricsReport* report, const cv::Mat& good, double reference_sum) const;
+  std::vector<int> region_index_;  // row-major pixel -> index in region_indices_, -1 outside
+  int block_length_ = 0;
+  std::vector<int> block_frames_;
+  std::vector<float> cells_, shifts_;  // shifts_: (t0, r0) per region pixel
+  // Per region pixel, with stderr.Y: sum_t s^2, and sum_t (d relmse term / dR)^2 s^2.
+  std::vector<double> noise_, relmse_noise_;
+  int stderr_frames_ = 0;
 };
 
 }  // namespace shimmer::metrics

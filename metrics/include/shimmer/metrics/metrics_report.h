@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 
 #include "shimmer/core/result.h"
+#include "shimmer/metrics/block_bootstrap.h"
 #include "shimmer/metrics/exr_sequence.h"
 #include "shimmer/metrics/highlight_mask.h"
 
@@ -67,6 +68,18 @@ struct MetricsReport {
   long long nan_pixels = 0;                                   // region pixels with a non-finite sample anywhere
   long long nan_samples = 0;                                  // (pixel, frame) samples that were non-finite
   FlickerResult flicker;
+
+  // With a reference: 95 % intervals (docs/metrics.md, "Intervals"), a
+  // metric's absent when the metric is undefined; how they were drawn.
+  struct Bootstrap {
+    int replicates = 0, frame_block = 0, tile = 0;
+    std::uint64_t seed = 0;
+  };
+  std::optional<TileBlockStatistics::Intervals> ci95;
+  std::optional<Bootstrap> bootstrap;
+  // With a reference carrying stderr.Y: mean over M and t of stderr.Y^2 over
+  // tv_err, in [0, 1]: the share of tv_err the reference's own noise explains.
+  std::optional<double> tv_err_floor;
 
   // Per-pixel maps (CV_32F), 0 outside the region and at excluded pixels.
   cv::Mat region_mask;  // CV_8U 0/1, after exclusion of non-finite pixels

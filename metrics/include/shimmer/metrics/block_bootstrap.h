@@ -1,0 +1,70 @@
+// 95 % intervals for the headline metrics from a block bootstrap over frames
+// and pixel tiles, computed from per-(tile, frame-block) sufficient statistics
+// so that the sequence is never held (docs/metrics.md, "Intervals").
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace shimmer::metrics {
+
+struct BootstrapSettings {
+  int replicates = 1000;
+  int tile = 8;                   // square pixel tiles, tile x tile
+  std::uint64_t seed = 20261201;  // fixed: reruns give identical intervals
+};
+
+// Frames per block: round(cbrt(N)), at least 2 and at most N (Kuensch 1989,
+// Hall, Horowitz & Jing 1995: block length of order N^(1/3) for variances).
+int FrameBlockLength(int frames);
+
+struct Interval {
+  double lo = 0, hi = 0;
+};
+
+// What the bootstrap resamples: one row of sums per tile, each over the
+// tile's good region pixels, split by frame block. Values are shifted per
+// pixel by its first frame (x - x_0) before summing, which leaves variances
+// unchanged and keeps the float per-block sums free of cancellation.
+class TileBlockStatistics {
+ public:
+  explicit TileBlockStatistics(std::vector<int> block_frames);
+
+  int blocks() const { return static_cast<int>(block_frames_.size()); }
+  int tiles() const { return static_cast<int>(rows_.size() / stride_); }
+
+  // Starts a tile's row (all zeros); returns its index.
+  int AddTile();
+  // One pixel: its first-frame values t0, r0; per block k the shifted sums
+  // st[k] = sum (T - t0), sr[k] = sum (R - r0), the shifted squares qt, qr,
+  // qe (E - e0 with e0 = t0 - r0), and sq[k] = sum E^2 / (R^2 + eps).
+  // `flicker_power` and `flicker_segments`: the pixel's Watson-weighted
+  // spectral power summed over its segments, and their count.
+  void AddPixel(int tile, double t0, double r0, const float* st, const float* sr, const float* qt, const float* qr,
+                const float* qe, const float* sq, double flicker_power, double flicker_segments);
+
+  struct Estimates {
+    double tv_test = 0, tv_ref = 0, tv_err = 0;
+    std::optional<double> tv_ratio, energy_bias;
+    double relmse = 0, flicker_index = 0;
+  };
+  // The metrics of the data set made of tile i taken w[i] times and frame
+  // block k taken c[k] times (empty w or c: each once).
+  Estimates Evaluate(const std::vector<int>& tile_counts, const std::vector<int>& block_counts) const;
+
+  struct Intervals {
+    std::optional<Interval> tv_err, tv_ratio, energy_bias, relmse, flicker_index;
+  };
+  // The 95 % intervals about `point` (the metrics as computed by the pass).
+  Intervals Bootstrap(const Estimates& point, const BootstrapSettings& settings) const;
+
+ private:
+  Estimates FromSums(const double* row, const std::vector<int>& block_counts) const;
+
+  std::vector<int> block_frames_;
+  int stride_ = 0;
+  std::vector<double> rows_;
+};
+
+}  // namespace shimmer::metrics

@@ -1,0 +1,254 @@
+// The 95 % intervals and tv_err_floor: coverage on synthetic errors of known
+// variance, determinism, and the reference noise read from stderr.Y.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "shimmer/metrics/metrics_accumulator.h"
+#include "shimmer/metrics/metrics_report.h"
+#include "test_sequences.h"
+
+namespace shimmer::metrics {
+namespace {
+
+constexpr int kSize = 32, kFrames = 24;
+
+// A static reference pattern R(x, y) and a test (1 + beta) R + sigma n_t,
+// n a per-pixel stationary unit-variance process: white, or AR(1) with
+// coefficient phi. True energy_bias = beta; the expected tv_err is sigma^2
+// times the expected sample variance of a unit process of kFrames samples.
+struct Synthetic {
+  double sigma = 0.1, beta = 0.02, phi = 0;
+  std::uint64_t seed = 1;
+};
+
+double ReferenceAt(int x, int y) { return 1.0 + 0.5 * std::sin(0.4 * x) * std::cos(0.3 * y); }
+
+// E[s^2] / sigma^2 for a stationary series with autocorrelation phi^k:
+// 1 - 2/(n(n-1)) sum_{k=1}^{n-1} (n-k) phi^k.
+double ExpectedSampleVarianceFactor(double phi, int n) {
+  double sum = 0;
+  for (int k = 1; k < n; ++k) sum += (n - k) * std::pow(phi, k);
+  return 1.0 - 2.0 * sum / (double(n) * (n - 1));
+}
+
+AccumulatorSetup Setup(bool stderr_y = false) {
+  AccumulatorSetup setup;
+  setup.width = setup.height = kSize;
+  setup.frames = kFrames;
+  setup.fps = 30;
+  setup.has_reference = true;
+  setup.region = cv::Mat::ones(kSize, kSize, CV_8U);
+  setup.signal = FlickerSignal::kError;
+  setup.segment_length = kFrames;
+  setup.reference_stderr = stderr_y;
+  return setup;
+}
+
+MetricsReport Simulate(const Synthetic& s) {
+  MetricsAccumulator accumulator(Setup());
+  std::mt19937_64 random(s.seed);
+  std::normal_distribution<double> normal;
+  std::vector<double> noise(kSize * kSize);
+  const double innovation = std::sqrt(1 - s.phi * s.phi);
+  cv::Mat T(kSize, kSize, CV_32F), R(kSize, kSize, CV_32F);
+  for (int t = 0; t < kFrames; ++t) {
+    for (int y = 0; y < kSize; ++y)
+      for (int x = 0; x < kSize; ++x) {
+        double& n = noise[y * kSize + x];
+        n = t == 0 ? normal(random) : s.phi * n + innovation * normal(random);
+        R.at<float>(y, x) = static_cast<float>(ReferenceAt(x, y));
+        T.at<float>(y, x) = static_cast<float>((1 + s.beta) * ReferenceAt(x, y) + s.sigma * n);
+      }
+    accumulator.AddFrame(T, R, cv::Mat(), "t", "r");
+  }
+  MetricsReport report;
+  EXPECT_TRUE(accumulator.Finish(&report));
+  return report;
+}
+
+struct Coverage {
+  int tv_err = 0, energy_bias = 0;
+};
+
+Coverage CountCoverage(Synthetic s, int trials) {
+  const double true_tv_err = s.sigma * s.sigma * ExpectedSampleVarianceFactor(s.phi, kFrames);
+  Coverage covered;
+  for (int trial = 0; trial < trials; ++trial) {
+    s.seed = 1000 + trial;
+    const MetricsReport r = Simulate(s);
+    const Interval tv = *r.ci95->tv_err, bias = *r.ci95->energy_bias;
+    covered.tv_err += tv.lo <= true_tv_err && true_tv_err <= tv.hi;
+    covered.energy_bias += bias.lo <= s.beta && s.beta <= bias.hi;
+  }
+  return covered;
+}
+
+TEST(MetricsIntervals, CoverTheTrueValueOfWhiteNoiseIn90To99PercentOfTrials) {
+  const Coverage c = CountCoverage({.phi = 0}, 200);
+  std::printf("white noise: tv_err covered %d/200, energy_bias %d/200\n", c.tv_err, c.energy_bias);
+  EXPECT_GE(c.tv_err, 180);
+  EXPECT_LE(c.tv_err, 198);
+  EXPECT_GE(c.energy_bias, 180);
+  EXPECT_LE(c.energy_bias, 198);
+}
+
+TEST(MetricsIntervals, CoverTheTrueValueOfAr1NoiseIn90To99PercentOfTrials) {
+  const Coverage c = CountCoverage({.phi = 0.5}, 200);
+  std::printf("AR(1), phi 0.5: tv_err covered %d/200, energy_bias %d/200\n", c.tv_err, c.energy_bias);
+  EXPECT_GE(c.tv_err, 180);
+  EXPECT_LE(c.tv_err, 198);
+  EXPECT_GE(c.energy_bias, 180);
+  EXPECT_LE(c.energy_bias, 198);
+}
+
+TEST(MetricsIntervals, RerunsGiveIdenticalIntervalsThatHoldTheValue) {
+  const MetricsReport a = Simulate({.phi = 0.3, .seed = 7}), b = Simulate({.phi = 0.3, .seed = 7});
+  ASSERT_TRUE(a.ci95 && b.ci95);
+  auto same = [](const std::optional<Interval>& x, const std::optional<Interval>& y) {
+    ASSERT_TRUE(x && y);
+    EXPECT_EQ(x->lo, y->lo);
+    EXPECT_EQ(x->hi, y->hi);
+  };
+  same(a.ci95->tv_err, b.ci95->tv_err);
+  same(a.ci95->energy_bias, b.ci95->energy_bias);
+  same(a.ci95->relmse, b.ci95->relmse);
+  same(a.ci95->flicker_index, b.ci95->flicker_index);
+  auto holds = [](const std::optional<Interval>& i, double v) {
+    ASSERT_TRUE(i);
+    EXPECT_LE(i->lo, v);
+    EXPECT_LE(v, i->hi);
+    EXPECT_LT(i->lo, i->hi);
+  };
+  holds(a.ci95->tv_err, *a.tv_err);
+  holds(a.ci95->energy_bias, *a.energy_bias);
+  holds(a.ci95->relmse, *a.relmse);
+  holds(a.ci95->flicker_index, a.flicker.flicker_index);
+  EXPECT_FALSE(a.ci95->tv_ratio);  // a static reference: tv_ref = 0, no ratio
+  EXPECT_FALSE(a.tv_err_floor);    // no stderr.Y
+  ASSERT_TRUE(a.bootstrap);
+  EXPECT_EQ(a.bootstrap->frame_block, 3);  // round(cbrt(24))
+  EXPECT_EQ(a.bootstrap->tile, 8);
+  EXPECT_EQ(a.bootstrap->replicates, 1000);
+}
+
+TEST(MetricsIntervals, FrameBlocksAreAboutTheCubeRootOfTheFrameCountAndAtLeastTwo) {
+  EXPECT_EQ(FrameBlockLength(2), 2);
+  EXPECT_EQ(FrameBlockLength(8), 2);
+  EXPECT_EQ(FrameBlockLength(24), 3);
+  EXPECT_EQ(FrameBlockLength(48), 4);
+  EXPECT_EQ(FrameBlockLength(64), 4);
+  EXPECT_EQ(FrameBlockLength(1000), 10);
+}
+
+// With every tile and block once, the sufficient statistics give back the
+// metrics the pass computed: the bootstrap resamples the same estimators.
+TEST(MetricsIntervals, SufficientStatisticsReproduceThePassMetrics) {
+  const std::vector<int> blocks = {3, 3, 2};
+  TileBlockStatistics cells(blocks);
+  // Two tiles of one pixel each: T = 1 + t, R = 0.5 (one) and T = 2 - t / 8, R = 1 + t / 16 (other).
+  std::mt19937 random(3);
+  std::uniform_real_distribution<float> u(0.2f, 2.f);
+  std::vector<std::vector<double>> test(2), ref(2);
+  for (int p = 0; p < 2; ++p)
+    for (int t = 0; t < 8; ++t) test[p].push_back(u(random)), ref[p].push_back(u(random));
+  double sum_t = 0, sum_r = 0, tv_err = 0, tv_test = 0, rel = 0;
+  for (int p = 0; p < 2; ++p) {
+    std::vector<float> st(3, 0), sr(3, 0), qt(3, 0), qr(3, 0), qe(3, 0), sq(3, 0);
+    double mt = 0, me = 0;
+    for (int t = 0; t < 8; ++t) mt += test[p][t] / 8, me += (test[p][t] - ref[p][t]) / 8;
+    for (int t = 0; t < 8; ++t) {
+      const int k = t / 3;
+      const double dt = test[p][t] - test[p][0], dr = ref[p][t] - ref[p][0], e = test[p][t] - ref[p][t];
+      st[k] += dt, sr[k] += dr, qt[k] += dt * dt, qr[k] += dr * dr, qe[k] += (dt - dr) * (dt - dr);
+      sq[k] += e * e / (ref[p][t] * ref[p][t] + 0.01);
+      sum_t += test[p][t], sum_r += ref[p][t], rel += e * e / (ref[p][t] * ref[p][t] + 0.01) / 16;
+      tv_test += (test[p][t] - mt) * (test[p][t] - mt) / 14;
+      tv_err += (e - me) * (e - me) / 14;
+    }
+    cells.AddPixel(cells.AddTile(), test[p][0], ref[p][0], st.data(), sr.data(), qt.data(), qr.data(), qe.data(),
+                   sq.data(), 0.5, 1);
+  }
+  const TileBlockStatistics::Estimates e = cells.Evaluate({}, {});
+  EXPECT_NEAR(e.tv_test, tv_test, 1e-5 * tv_test);
+  EXPECT_NEAR(e.tv_err, tv_err, 1e-5 * tv_err);
+  EXPECT_NEAR(*e.energy_bias, (sum_t - sum_r) / sum_r, 1e-6);
+  EXPECT_NEAR(e.relmse, rel, 1e-5 * rel);
+  EXPECT_DOUBLE_EQ(e.flicker_index, 0.5);
+  // Tile 0 twice and tile 1 not at all, blocks as they are: tile 0's numbers.
+  const TileBlockStatistics::Estimates only0 = cells.Evaluate({2, 0}, {});
+  double m0 = 0, v0 = 0;
+  for (double v : test[0]) m0 += v / 8;
+  for (double v : test[0]) v0 += (v - m0) * (v - m0) / 7;
+  EXPECT_NEAR(only0.tv_test, v0, 1e-5 * v0);
+}
+
+// A reference with stderr.Y = s, its frames R0 + s n_t, and a test R0 +
+// sigma n'_t: E's variance is sigma^2 + s^2, of which s^2 is the
+// reference's noise.
+TEST(MetricsIntervals, TvErrFloorRecoversTheReferenceNoiseShareFromStderrY) {
+  testing::TempDir dir;
+  const double sigma = 0.05, s = 0.1;  // expected share s^2 / (sigma^2 + s^2) = 0.8
+  std::mt19937_64 random(11);
+  std::normal_distribution<double> normal;
+  std::filesystem::create_directories(dir / "test");
+  std::filesystem::create_directories(dir / "ref");
+  for (int t = 0; t < kFrames; ++t) {
+    cv::Mat T(kSize, kSize, CV_32F), R(kSize, kSize, CV_32F), S(kSize, kSize, CV_32F, cv::Scalar(s));
+    for (int y = 0; y < kSize; ++y)
+      for (int x = 0; x < kSize; ++x) {
+        T.at<float>(y, x) = static_cast<float>(ReferenceAt(x, y) + sigma * normal(random));
+        R.at<float>(y, x) = static_cast<float>(ReferenceAt(x, y) + s * normal(random));
+      }
+    char name[32];
+    std::snprintf(name, sizeof name, "f%04d.exr", t);
+    ASSERT_TRUE(testing::WriteExrMats(dir / "test" / name, {{"R", T}, {"G", T}, {"B", T}}));
+    ASSERT_TRUE(testing::WriteExrMats(dir / "ref" / name, {{"R", R}, {"G", R}, {"B", R}, {"stderr.Y", S}}));
+  }
+  auto with = ComputeMetrics({.test = dir / "test", .reference = dir / "ref"});
+  ASSERT_TRUE(with) << with.error();
+  ASSERT_TRUE(with->tv_err_floor);
+  EXPECT_NEAR(*with->tv_err_floor, 0.8, 0.03);
+  // The reference noise lowers tv_err's lower end by the floor, s^2.
+  EXPECT_LE(with->ci95->tv_err->lo, *with->tv_err - s * s + 1e-9);
+  const nlohmann::json j = ToJson(*with);
+  EXPECT_TRUE(j.contains("tv_err_floor"));
+  for (const char* key : {"tv_err", "tv_ratio", "energy_bias", "relmse", "flicker_index"}) {
+    ASSERT_TRUE(j["ci95"].contains(key)) << key;
+    ASSERT_EQ(j["ci95"][key].size(), 2u) << key;
+    EXPECT_LE(j["ci95"][key][0].get<double>(), j["ci95"][key][1].get<double>()) << key;
+  }
+  EXPECT_EQ(j["bootstrap"]["replicates"], 1000);
+  EXPECT_EQ(j["bootstrap"]["frame_block"], 3);
+  EXPECT_EQ(j["bootstrap"]["tile"], 8);
+  EXPECT_TRUE(j["bootstrap"].contains("seed"));
+
+  // Without stderr.Y (another renderer's reference): intervals, no floor.
+  for (int t = 0; t < kFrames; ++t) {
+    char name[32];
+    std::snprintf(name, sizeof name, "f%04d.exr", t);
+    cv::Mat R(kSize, kSize, CV_32F);
+    for (int y = 0; y < kSize; ++y)
+      for (int x = 0; x < kSize; ++x) R.at<float>(y, x) = static_cast<float>(ReferenceAt(x, y) + s * normal(random));
+    std::filesystem::create_directories(dir / "plain");
+    ASSERT_TRUE(testing::WriteExrMats(dir / "plain" / name, {{"R", R}, {"G", R}, {"B", R}}));
+  }
+  auto without = ComputeMetrics({.test = dir / "test", .reference = dir / "plain"});
+  ASSERT_TRUE(without) << without.error();
+  EXPECT_FALSE(without->tv_err_floor);
+  EXPECT_FALSE(ToJson(*without).contains("tv_err_floor"));
+  EXPECT_TRUE(ToJson(*without).contains("ci95"));
+
+  // Without a reference: no interval keys at all.
+  auto alone = ComputeMetrics({.test = dir / "test"});
+  ASSERT_TRUE(alone) << alone.error();
+  const nlohmann::json k = ToJson(*alone);
+  EXPECT_FALSE(k.contains("ci95"));
+  EXPECT_FALSE(k.contains("bootstrap"));
+  EXPECT_FALSE(k.contains("tv_err_floor"));
+}
+
+}  // namespace
+}  // namespace shimmer::metrics

@@ -175,7 +175,6 @@ TEST_P(BlenderCheck, CyclesAgreesWithTheReference) {
                                                     ::testing::UnitTest::GetInstance()->current_test_info()->name());
   fs::remove_all(dir);
   fs::create_directories(dir);
-  std::string name = GetParam();
   const Comparison c = Compare("sphere", GetParam(), dir);
   EXPECT_NEAR(c.energy_ratio, 1.0, 0.005);
   EXPECT_GT(c.compared, kSize * kSize / 2);

@@ -89,5 +89,6 @@ void AddMergeCommand(CLI::App& app);
 void AddSweepCommand(CLI::App& app);
 void AddReportCommand(CLI::App& app);
 void AddFitCommand(CLI::App& app);
+void AddExportBlenderCommand(CLI::App& app);
 
 }  // namespace shimmer::cli

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   shimmer::cli::AddSweepCommand(app);
   shimmer::cli::AddReportCommand(app);
   shimmer::cli::AddFitCommand(app);
+  shimmer::cli::AddExportBlenderCommand(app);
   using shimmer::cli::kExitBadInput;
   using shimmer::cli::kExitFailure;
   try {

@@ -388,6 +388,15 @@ std::vector<Case> UnitCases() {
        "render --frames 2 --size 16 16 --variant-file sig.glsl --out out", 2, "sig.glsl"},
       {"RenderGlslNoUserVariant", File("none.glsl", "// nothing here\n"),
        "render --frames 2 --size 16 16 --variant-file none.glsl --out out", 2, "none.glsl"},
+      // export-blender
+      {"ExportBlenderUnknownScene", Nothing(), "export-blender sphre -o s.py", 2, "sphre"},
+      {"ExportBlenderFrameOutOfRange", Nothing(), "export-blender sphere --frames 4 --frame 4 -o s.py", 2, "--frame 4"},
+      {"ExportBlenderFrameNegative", Nothing(), "export-blender sphere --frame -1 -o s.py", 2, "--frame -1"},
+      {"ExportBlenderOutMissingDirectory", Nothing(), "export-blender sphere -o nodir/s.py", 2, "nodir"},
+      {"ExportBlenderOutIsADirectory", ReadOnlyDirectory("d"), "export-blender sphere -o d", 2, "-o d"},
+      {"ExportBlenderBumpyPlane", Nothing(), "export-blender bumpy-plane -o s.py", 2, "bump"},
+      {"ExportBlenderAnisotropic", Nothing(), "export-blender sphere --material ggx:0.1,0.3 -o s.py", 2, "anisotropic"},
+      {"ExportBlenderSizeZero", Nothing(), "export-blender sphere --size 0 8 -o s.py", 2, "--size"},
       // render: scene files
       {"SceneMalformedJson", File("s.json", "{\"primitives\": [{\"type\": \"sphere\", }]}\n"),
        "render --scene s.json --frames 2 --size 16 16 --out out", 2, "s.json:1"},

@@ -3,6 +3,7 @@
 // reference doubles its samples per axis.
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -17,8 +18,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// From zero to anything is as large a change as there is (finite: the store's JSON has no infinity).
 double RelativeChange(double check, double base) {
-  if (base == 0) return check == 0 ? 0 : INFINITY;
+  if (base == 0) return check == 0 ? 0 : std::numeric_limits<double>::max();
   return std::abs(check / base - 1);
 }
 

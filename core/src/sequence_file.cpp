@@ -79,6 +79,7 @@ json ToJson(const SequenceFile& s) {
     json fj = {{"file", f.file}, {"gpu_ms", f.gpu_ms}, {"time_s", f.time_s}};
     if (f.mean_spp) fj["mean_spp"] = *f.mean_spp;
     if (f.rounds) fj["rounds"] = *f.rounds;
+    if (f.unconverged_pixels) fj["unconverged_pixels"] = *f.unconverged_pixels;
     frames.push_back(std::move(fj));
   }
   const SequenceCamera& c = s.camera;
@@ -117,9 +118,11 @@ json ToJson(const SequenceFile& s) {
   if (s.fps) j["fps"] = *s.fps;
   if (s.reference) {
     j["reference_spp"] = s.reference_spp;
+    j["reference_replicates"] = s.reference_replicates;
     j["reference_tolerance"] = s.reference_tolerance;
     j["reference_luminance_floor"] = s.reference_luminance_floor;
   }
+  if (s.seed != 0) j["seed"] = s.seed;
   if (!s.variant_file.empty()) j["variant_file"] = s.variant_file;
   if (!s.error.empty()) j["error"] = s.error;
   return j;
@@ -155,6 +158,11 @@ Result<SequenceFile> SequenceFromJson(const json& j, const std::string& source) 
   r.Read("spp", &s.spp);
   r.Read("reference", &s.reference);
   r.Read("reference_spp", &s.reference_spp);
+  r.Read("reference_replicates", &s.reference_replicates);
+  std::int64_t seed = 0;
+  r.Read("seed", &seed);
+  if (seed < 0 || seed > std::int64_t(UINT32_MAX)) r.Fail("seed", "an integer in 0..4294967295");
+  s.seed = std::uint32_t(seed);
   r.Read("reference_tolerance", &s.reference_tolerance);
   r.Read("reference_luminance_floor", &s.reference_luminance_floor);
   r.Read("device", &s.device);
@@ -215,6 +223,7 @@ Result<SequenceFile> SequenceFromJson(const json& j, const std::string& source) 
         fr.Read("time_s", &frame.time_s);
         fr.Read("mean_spp", &frame.mean_spp);
         fr.Read("rounds", &frame.rounds);
+        fr.Read("unconverged_pixels", &frame.unconverged_pixels);
         if (!fr.error().empty()) return R::Failure(fr.error());
       } else {
         return R::Failure(source + shape);

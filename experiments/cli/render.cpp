@@ -2,6 +2,8 @@
 // the Vulkan compute renderer into EXR frames and a sequence.json.
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 
@@ -25,8 +27,10 @@ struct RenderOptions {
   std::vector<int> size{96, 96};
   double fps = 30;
   int reference_spp = 0;
+  int reference_replicates = 4;
   double reference_tolerance = 0;
   int max_rounds = 64;
+  std::uint32_t seed = 0;
   std::string device;
   std::string out = "shimmer-render";
   bool list_devices = false;
@@ -47,6 +51,7 @@ const FieldFlags kRenderFlags = {{"width and height", "--size"},
                                  {"frames", "--frames"},
                                  {"fps", "--fps"},
                                  {"reference_spp", "--reference-spp"},
+                                 {"reference_replicates", "--reference-replicates"},
                                  {"reference_tolerance", "--reference-tolerance"},
                                  {"max_rounds", "--max-rounds"},
                                  {"a reference renders variant none, not a variant file",
@@ -90,7 +95,9 @@ void Run(const RenderOptions& o, const CLI::App& cmd) {
   s.reference_spp = o.reference_spp;
   s.reference_tolerance = o.reference_tolerance;
   if (o.reference_tolerance > 0 && o.reference_spp == 0) s.reference_spp = 4;
+  s.reference_replicates = o.reference_replicates;
   s.max_rounds = o.max_rounds;
+  s.seed = o.seed;
   s.device = o.device;
   s.preview_png = o.preview;
   if (!o.preview.empty()) RequireParentDirectory("--preview", o.preview);
@@ -115,6 +122,16 @@ void Run(const RenderOptions& o, const CLI::App& cmd) {
               seq.camera.path.c_str(), seq.variant.c_str(), s.width, s.height, o.out.c_str(), seq.MeanGpuMs(),
               seq.device.c_str());
   if (!o.preview.empty()) std::printf("preview: %s\n", o.preview.c_str());
+  long long unconverged = 0;
+  int frames = 0;
+  for (const SequenceFrame& f : seq.frames)
+    if (f.unconverged_pixels.value_or(0) > 0) unconverged += *f.unconverged_pixels, ++frames;
+  if (unconverged > 0)
+    std::fprintf(stderr,
+                 "shimmer: warning: %lld pixels in %d of %zu frames stayed above --reference-tolerance %g at "
+                 "--max-rounds %d\n",
+                 unconverged, frames, seq.frames.size(), s.reference_tolerance,
+                 std::max(s.max_rounds, s.reference_replicates));
 }
 
 }  // namespace
@@ -145,10 +162,19 @@ void AddRenderCommand(CLI::App& app) {
   cmd->add_option("--fps", o->fps, "Frames per second (camera time step; metadata)")->capture_default_str();
   auto spp = cmd->add_option("--reference-spp", o->reference_spp,
                              "Render the reference: variant none with N x N stratified samples per pixel");
+  cmd->add_option("--reference-replicates", o->reference_replicates,
+                  "Reference: K independent N x N patterns per pixel (2..4096); their spread is the standard "
+                  "error (stderr.Y)")
+      ->capture_default_str();
   cmd->add_option("--reference-tolerance", o->reference_tolerance,
-                  "Adaptive reference: rounds of N x N samples (N = --reference-spp, default 4) until the "
-                  "standard error is below T times max(luminance, 0.01)");
-  cmd->add_option("--max-rounds", o->max_rounds, "Adaptive reference: most rounds per frame")->capture_default_str();
+                  "Adaptive reference: K rounds of N x N samples (N = --reference-spp, default 4), then more "
+                  "until the standard error is below T times max(luminance, 0.01)");
+  cmd->add_option("--max-rounds", o->max_rounds, "Adaptive reference: most rounds per frame (at least K)")
+      ->capture_default_str();
+  cmd->add_option("--seed", o->seed,
+                  "Random seed of the reference's samples (renders with different seeds are "
+                  "independent)")
+      ->capture_default_str();
   cmd->add_option("--device", o->device, "Vulkan device (substring of its name)");
   cmd->add_option("--preview", o->preview, "Also write a tone-mapped PNG of frame 0 to this file");
   cmd->add_flag("--list-devices", o->list_devices, "List Vulkan devices and exit");

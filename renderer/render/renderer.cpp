@@ -1,6 +1,7 @@
 #include "shimmer/renderer/renderer.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -124,6 +125,10 @@ Status ValidateNumbers(const RenderSettings& s) {
                 std::to_string(s.reference_spp));
   if (s.reference_tolerance < 0 || !std::isfinite(s.reference_tolerance))
     return fail("reference_tolerance must be a finite value > 0");
+  if (s.reference_replicates < 2 || s.reference_replicates > kMaxRounds)
+    return fail("reference_replicates must be in 2.." + std::to_string(kMaxRounds) +
+                " (independent N x N patterns per reference pixel; their spread is the standard error), got " +
+                std::to_string(s.reference_replicates));
   if (s.max_rounds < 1 || s.max_rounds > kMaxRounds)
     return fail("max_rounds must be in 1.." + std::to_string(kMaxRounds) + ", got " + std::to_string(s.max_rounds));
   return Ok();
@@ -298,10 +303,16 @@ Result<Frame> Renderer::RenderFrame(int index) {
   push.params[0] = float(p.fp_max), push.params[1] = float(p.fp_min_cap);
   push.params[2] = float(p.sigma2), push.params[3] = float(p.kappa);
   push.round[1] = index;
+  push.round[2] = s.reference_replicates;
+  push.round[3] = std::bit_cast<std::int32_t>(s.seed);
   const bool adaptive = im.variant.reference && s.reference_tolerance > 0;
   push.target[0] = adaptive ? float(s.reference_tolerance) : 0.0f;
   push.target[1] = float(kReferenceLuminanceFloor);
-  const int rounds = adaptive ? std::max(1, s.max_rounds) : 1;
+  // A reference renders K replicates (rounds), an adaptive one then more
+  // until every pixel is within the tolerance or max_rounds is reached. (N = 1
+  // shades the pixel centre: there is nothing to replicate.)
+  const int replicates = im.variant.reference && im.variant.spp_n > 1 ? s.reference_replicates : 1;
+  const int rounds = adaptive ? std::max(replicates, s.max_rounds) : replicates;
   Frame frame;
   frame.rounds = 0;
   frame.width = s.width;
@@ -339,7 +350,8 @@ Result<Frame> Renderer::RenderFrame(int index) {
       }
     }
     frame.rounds = round + 1;
-    if (unconverged == 0) break;
+    frame.unconverged_pixels = int(unconverged);
+    if (frame.rounds >= replicates && unconverged == 0) break;
   }
   if (!banded) {
     auto t0 = Clock::now();

@@ -134,9 +134,11 @@ SequenceFile Describe(const RenderSettings& settings, const Renderer& renderer) 
   seq.reference = v.reference;
   if (v.reference) {
     seq.reference_spp = v.spp_n;
+    seq.reference_replicates = v.spp_n > 1 ? settings.reference_replicates : 1;
     seq.reference_tolerance = settings.reference_tolerance;
     seq.reference_luminance_floor = kReferenceLuminanceFloor;
   }
+  seq.seed = settings.seed;
   seq.variant_file = settings.variant_file;
   seq.device = renderer.device_name();
   seq.driver = renderer.device_driver();
@@ -226,10 +228,14 @@ Result<SequenceFile> RenderSequence(const RenderSettings& settings, const std::s
         return fail(Prefixed("frame " + std::to_string(i), frame.failure()));
       }
       readback_ms += frame->readback_ms;
-      SequenceFrame entry{FrameName(i), frame->gpu_ms, i / settings.fps, std::nullopt, std::nullopt};
+      SequenceFrame entry;
+      entry.file = FrameName(i);
+      entry.gpu_ms = frame->gpu_ms;
+      entry.time_s = i / settings.fps;
       if (reference) {
         entry.mean_spp = frame->mean_spp;
         entry.rounds = frame->rounds;
+        if (settings.reference_tolerance > 0) entry.unconverged_pixels = frame->unconverged_pixels;
       }
       seq.frames.push_back(entry);
       if (i == 0 && !settings.preview_png.empty()) {

@@ -1,10 +1,10 @@
 #version 460
 // The renderer's kernel: one dispatch shades every pixel of one frame (or one
-// round of reference samples). Only the Vulkan-specific parts live here:
-// invocation -> pixel mapping, the 2x2 quad exchange for quad derivatives, the
-// sub-pixel sample loop of the reference, buffer writes. Everything a pixel
-// computes is in the shading core (scene.glsl, pixel.glsl), which the CPU
-// oracle runs in double.
+// round, a replicate, of reference samples). Only the Vulkan-specific parts
+// live here: invocation -> pixel mapping, the 2x2 quad exchange for quad
+// derivatives, the sub-pixel sample loop of the reference, buffer writes.
+// Everything a pixel computes is in the shading core (scene.glsl, pixel.glsl),
+// which the CPU oracle runs in double.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_quad : require
@@ -49,7 +49,7 @@ layout(std430, binding = 3) buffer CounterBuf { uint unconverged; } counter;
 
 layout(push_constant) uniform Push {
   vec4 params;   // fp_max, fp_min_cap, sigma2, kappa
-  ivec4 round;   // reference round, frame index
+  ivec4 round;   // reference round, frame index, replicates K, seed (uint bits)
   vec4 target;   // relative standard error target (0: off), luminance floor
 } pc;
 
@@ -132,9 +132,13 @@ uint pcgHash(uint v) {
   return (word >> 22u) ^ word;
 }
 
-// The pixel's seed for this round; each sample hashes it with its index.
+// The pixel's seed for this round; each sample hashes it with its index. A
+// non-zero render seed gives the same frame independent randomness; seed 0
+// keeps the sequences of renders made before it existed.
 uint pixelSeed(ivec2 px) {
-  return pcgHash(uint(px.x) + pcgHash(uint(px.y) + pcgHash(uint(pc.round.x) + pcgHash(uint(pc.round.y)))));
+  uint frameKey = uint(pc.round.y);
+  if (pc.round.w != 0) frameKey = pcgHash(frameKey ^ pcgHash(uint(pc.round.w)));
+  return pcgHash(uint(px.x) + pcgHash(uint(px.y) + pcgHash(uint(pc.round.x) + pcgHash(frameKey))));
 }
 
 vec2 sampleJitter(uint seed, int s) {
@@ -150,16 +154,13 @@ Ray sampleRay(Camera c, ivec2 px, uint seed, int k) {
   return cameraRay(c, vec2(px) + (vec2(i, j) + sampleJitter(seed, k)) / float(SPP_N));
 }
 
-// Running sums of one pixel's samples in this round: radiance sums and the
-// luminance mean and M2 (Welford).
+// Running radiance sums of one pixel's samples in this round.
 struct SampleSums {
   vec3 spec;
   vec3 diff;
-  float meanY;
-  float m2;
 };
 
-SampleSums addSample(SampleSums a, int k, SurfaceSample s, Ray ray, Light light, Material m, VariantParams vp) {
+SampleSums addSample(SampleSums a, SurfaceSample s, Ray ray, Light light, Material m, VariantParams vp) {
   ShadingFootprint f = zeroFootprint(s);
 #ifdef SHIMMER_USER_VARIANT
   f = analyticFootprint(s, ray, light);
@@ -169,10 +170,6 @@ SampleSums addSample(SampleSums a, int k, SurfaceSample s, Ray ray, Light light,
   PixelShade sh = shadeSample(s, f, runVariant(m.ndf, m.alpha, f, vp), m);
   a.spec += sh.specular;
   a.diff += sh.diffuse;
-  float y = luminance(sh.specular + sh.diffuse);
-  float delta = y - a.meanY;
-  a.meanY += delta / float(k + 1);
-  a.m2 += delta * (y - a.meanY);
   return a;
 }
 
@@ -238,16 +235,22 @@ void main() {
     return;
   }
 
-  // Supersampled: N x N jittered strata of the pixel (box filter), merged into
-  // the running mean and luminance M2 of earlier rounds (Chan et al.).
+  // Supersampled: each round is one replicate, a full N x N jittered pattern
+  // (box filter) with its own jitter, merged into the running mean of earlier
+  // rounds. The standard error comes from the spread of the replicates' mean
+  // luminances (Welford over one observation per round): the i.i.d. formula
+  // over all samples ignores the stratification and overstates the error
+  // 2-27x. The count plane holds samples (replicates x N x N).
   if (!inside) return;
+  const int samples = SPP_N * SPP_N;
   float countA = pc.round.x == 0 ? 0.0 : get(CH_COUNT, idx);
-  vec3 specA = countA > 0.0 ? get3(CH_SPECULAR, idx) : vec3(0.0);
-  vec3 diffA = countA > 0.0 ? get3(CH_DIFFUSE, idx) : vec3(0.0);
-  float m2A = countA > 0.0 ? get(CH_M2, idx) : 0.0;
+  float repA = round(countA / float(samples));
+  vec3 specA = repA > 0.0 ? get3(CH_SPECULAR, idx) : vec3(0.0);
+  vec3 diffA = repA > 0.0 ? get3(CH_DIFFUSE, idx) : vec3(0.0);
+  float m2A = repA > 0.0 ? get(CH_M2, idx) : 0.0;
   float meanYA = luminance(specA + diffA);
-  if (countA > 1.0 && pc.target.x > 0.0) {
-    float se = sqrt(m2A / ((countA - 1.0) * countA));
+  if (repA >= float(pc.round.z) && pc.target.x > 0.0) {
+    float se = sqrt(m2A / ((repA - 1.0) * repA));
     if (se <= pc.target.x * max(meanYA, pc.target.y)) return;  // converged
   }
   // Two loops rather than one with a branch inside: lavapipe runs both sides
@@ -255,9 +258,8 @@ void main() {
   // one pass. Almost every pixel has few candidates.
   PixelCandidates candidates = pixelCandidates(pixelCone(c, px));
   bool fewCandidates = candidates.count <= PIXEL_CANDIDATES;
-  const int samples = SPP_N * SPP_N;
   const uint seed = pixelSeed(px);
-  SampleSums sums = SampleSums(vec3(0.0), vec3(0.0), 0.0, 0.0);
+  SampleSums sums = SampleSums(vec3(0.0), vec3(0.0));
   // Samples in pairs: two independent traces in one iteration give LLVM work
   // to interleave (the reference measured 12 % faster; fours were no better).
   int k = 0;
@@ -266,31 +268,33 @@ void main() {
     Ray ray1 = sampleRay(c, px, seed, k + 1);
     SurfaceSample s0 = tracePixelRay(candidates, ray0, light);
     SurfaceSample s1 = tracePixelRay(candidates, ray1, light);
-    sums = addSample(sums, k, s0, ray0, light, m, vp);
-    sums = addSample(sums, k + 1, s1, ray1, light, m, vp);
+    sums = addSample(sums, s0, ray0, light, m, vp);
+    sums = addSample(sums, s1, ray1, light, m, vp);
   }
   for (; k < (fewCandidates ? samples : 0); k++) {  // odd N x N
     Ray ray = sampleRay(c, px, seed, k);
-    sums = addSample(sums, k, tracePixelRay(candidates, ray, light), ray, light, m, vp);
+    sums = addSample(sums, tracePixelRay(candidates, ray, light), ray, light, m, vp);
   }
   for (int k = 0; k < (fewCandidates ? 0 : samples); k++) {
     Ray ray = sampleRay(c, px, seed, k);
-    sums = addSample(sums, k, traceRay(ray, light), ray, light, m, vp);
+    sums = addSample(sums, traceRay(ray, light), ray, light, m, vp);
   }
-  float countB = float(samples);
-  float count = countA + countB;
-  float d = sums.meanY - meanYA;
-  float m2All = m2A + sums.m2 + d * d * countA * countB / count;
-  vec3 spec = (specA * countA + sums.spec) / count;
-  vec3 diff = (diffA * countA + sums.diff) / count;
-  float se = sqrt(m2All / ((count - 1.0) * count));
+  vec3 specB = sums.spec / float(samples);
+  vec3 diffB = sums.diff / float(samples);
+  float rep = repA + 1.0;
+  vec3 spec = specA + (specB - specA) / rep;
+  vec3 diff = diffA + (diffB - diffA) / rep;
+  float yB = luminance(specB + diffB);
+  float m2All = m2A + (yB - meanYA) * (yB - luminance(spec + diff));
+  float count = rep * float(samples);
+  float se = rep > 1.0 ? sqrt(m2All / ((rep - 1.0) * rep)) : 0.0;
   put3(CH_BEAUTY, idx, spec + diff);
   put3(CH_SPECULAR, idx, spec);
   put3(CH_DIFFUSE, idx, diff);
   put(CH_COUNT, idx, count);
   put(CH_M2, idx, m2All);
   put(CH_STDERR, idx, se);
-  if (pc.target.x > 0.0 && se > pc.target.x * max(luminance(spec + diff), pc.target.y))
+  if (pc.target.x > 0.0 && (rep < float(pc.round.z) || se > pc.target.x * max(luminance(spec + diff), pc.target.y)))
     atomicAdd(counter.unconverged, 1u);
   if (pc.round.x == 0) {
     // AOVs describe the pixel centre.

@@ -25,13 +25,15 @@ SequenceFile Example() {
   s.spp = 16;
   s.reference = true;
   s.reference_spp = 4;
+  s.reference_replicates = 4;
   s.reference_tolerance = 0.01;
+  s.seed = 4000000000u;
   s.reference_luminance_floor = 0.01;
   s.device = "llvmpipe";
   s.driver = "llvmpipe Mesa";
   s.revision = "abc";
   s.timings.render_wall_ms = 12.5;
-  s.frames = {{"frame_0000.exr", 1.5, 0, 16.0, 1}, {"frame_0001.exr", 2.5, 1 / 24.0, 16.0, 2}};
+  s.frames = {{"frame_0000.exr", 1.5, 0, 64.0, 4, 0}, {"frame_0001.exr", 2.5, 1 / 24.0, 80.0, 5, 12}};
   return s;
 }
 
@@ -69,6 +71,8 @@ TEST(SequenceFile, WrongTypesNameTheKey) {
         Case{R"({"frames": [{"gpu_ms": 1}]})", "\"frames\" must be an array of file names"},
         Case{R"({"frames": [{"file": "a.exr", "gpu_ms": "x"}]})", "frames[0]: \"gpu_ms\""},
         Case{R"({"camera": {"target": [1, 2]}})", "camera: \"target\" must be [x, y, z]"},
+        Case{R"({"frames": [{"file": "a.exr", "unconverged_pixels": 0.5}]})", "frames[0]: \"unconverged_pixels\""},
+        Case{R"({"seed": -1})", "\"seed\" must be an integer in 0..4294967295"},
         Case{R"({"width": 1.5})", "\"width\" must be an integer"}, Case{R"([1, 2])", "expected a JSON object"}}) {
     auto s = SequenceFromJson(nlohmann::json::parse(c.json), "s.json");
     ASSERT_FALSE(s) << c.json;

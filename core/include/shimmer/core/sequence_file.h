@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -26,7 +27,8 @@ struct SequenceFrame {
   double time_s = 0;
   std::optional<double> mean_spp;  // references only
   std::optional<int> rounds;       // references only
-  std::optional<long long> unconverged_pixels;  // adaptive references: pixels left above the tolerance
+  // Adaptive references only: pixels still above the tolerance at max_rounds.
+  std::optional<int> unconverged_pixels;
 };
 
 struct SequenceCamera {
@@ -53,7 +55,9 @@ struct SequenceFile {
   int spp = 1;
   bool reference = false;
   int reference_spp = 0;
+  int reference_replicates = 0;  // K: independent N x N patterns (at least) per pixel
   double reference_tolerance = 0, reference_luminance_floor = 0;
+  std::uint32_t seed = 0;  // the render's seed; written when not 0
   std::string device, driver, revision;
   SequenceTimings timings;
   std::vector<SequenceFrame> frames;

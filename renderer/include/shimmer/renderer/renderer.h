@@ -59,13 +59,19 @@ struct RenderSettings {
   std::string variant = "none";  // catalogue name or supersample-N; ignored with variant_file
   std::vector<std::pair<std::string, double>> param_overrides;
   shading::DerivativeSource derivatives = shading::DerivativeSource::kQuadFine;
-  int reference_spp = 0;           // N: N x N stratified samples of `none` with a stderr layer (0: not a reference)
-  double reference_tolerance = 0;  // > 0: adaptive, rounds of N x N until stderr <= tolerance * max(Y, floor)
-  int max_rounds = 64;             // adaptive cap
-  int reference_replicates = 4;    // independent N x N patterns per pixel (rounds)
-  std::string variant_file;        // user variant GLSL defining userVariant(...)
-  std::string device;              // substring of the Vulkan device name
-  std::string preview_png;         // when set: a tone-mapped PNG of frame 0's beauty
+  int reference_spp = 0;  // N: N x N stratified samples of `none` with a stderr layer (0: not a reference)
+  // K: a reference pixel is the mean of at least K replicates, each a full
+  // N x N jittered pattern with its own jitter (one round each); stderr.Y is
+  // the spread of their means. A fixed reference renders exactly K rounds.
+  int reference_replicates = 4;
+  double reference_tolerance = 0;  // > 0: adaptive, K rounds, then more until stderr <= tolerance * max(Y, floor)
+  int max_rounds = 64;             // adaptive cap (at least K rounds are rendered)
+  // Mixed into every sample's random numbers: renders with different seeds are
+  // independent estimates of the same frame. 0 is the default sequence.
+  std::uint32_t seed = 0;
+  std::string variant_file;  // user variant GLSL defining userVariant(...)
+  std::string device;        // substring of the Vulkan device name
+  std::string preview_png;   // when set: a tone-mapped PNG of frame 0's beauty
   // Khronos validation layer (when installed); anything it reports fails the
   // render. On by default in debug builds.
   bool validation = kValidationByDefault;
@@ -92,6 +98,7 @@ struct Frame {
   double readback_ms = 0;
   int rounds = 1;
   double mean_spp = 1;
+  int unconverged_pixels = 0;  // adaptive reference: pixels above the tolerance after max_rounds
   float at(int channel, int x, int y) const {
     return planes[std::size_t(channel) * width * height + std::size_t(y) * width + x];
   }

@@ -58,7 +58,10 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
         "slopes. The published defaults are not offered to the search; validation evaluates the fitted value and the "
         "defaults on held-out shots. Frames: "
      << spec.width << "×" << spec.height << ", " << spec.frames << " frames, reference " << spec.reference.spp << "×"
-     << spec.reference.spp << " spp.\n\n";
+     << spec.reference.spp << " spp per replicate";
+  for (const auto& [material, spp] : spec.reference_spp_by_material)
+    md << ", " << spp << "×" << spp << " for " << material;
+  md << " (" << spec.reference.replicates << " replicates).\n\n";
 
   std::vector<std::string> scripts;
   std::map<std::string, std::vector<const MaterialFit*>> by_variant;

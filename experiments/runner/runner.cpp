@@ -145,10 +145,14 @@ Result<JobResult> MeasureJob(const Job& job, const RunOptions& options) {
 
 namespace {
 
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 // One check per shot (reference id) of these jobs that the store lacks, on
 // `options.jobs` workers.
 Status CheckShots(const std::vector<Job>& jobs, const RunOptions& options, ResultStore& store, RunProgress* progress,
-                  RunSummary* summary) {
+                  RunSummary* summary, std::chrono::steady_clock::time_point start) {
   std::vector<Job> shots;
   std::set<std::string> seen;
   for (const Job& job : jobs) {
@@ -179,6 +183,8 @@ Status CheckShots(const std::vector<Job>& jobs, const RunOptions& options, Resul
       if (!check->converged) ++summary->shots_unconverged;
       progress->current = "reference check " + std::to_string(summary->shots_checked) + "/" +
                           std::to_string(shots.size()) + ": " + what + (check->converged ? "" : " (unconverged)");
+      progress->elapsed_s = SecondsSince(start);
+      progress->eta_s = 0;
       if (options.progress) options.progress(*progress);
     }
   };
@@ -190,33 +196,48 @@ Status CheckShots(const std::vector<Job>& jobs, const RunOptions& options, Resul
   return Ok();
 }
 
-// Times one batch unless the store has every variant of it on this device.
-Status EnsureBenchmark(const BenchmarkBatch& batch, const BenchmarkOptions& bench, const RunOptions& options,
-                       ResultStore& store, RunProgress* progress, RunSummary* summary) {
-  auto existing = store.Benchmarks();
-  if (!existing) return existing.failure();
+// The name of the device the benchmarks run on, as the store records it.
+std::string BenchmarkDevice(const RunOptions& options) {
   auto devices = render::ListDevices();
-  std::string device;
   if (devices)
     for (const auto& d : *devices)
-      if (d.name.find(options.device) != std::string::npos) {
-        device = d.name;
-        break;
-      }
-  const bool done = std::all_of(batch.jobs.begin(), batch.jobs.end(), [&](const Job& job) {
-    return std::any_of(existing->begin(), existing->end(), [&](const BenchmarkCost& c) {
+      if (d.name.find(options.device) != std::string::npos) return d.name;
+  return "";
+}
+
+// Whether the store already has every variant of the batch timed on this device.
+bool BenchmarkDone(const BenchmarkBatch& batch, const BenchmarkOptions& bench, const std::string& device,
+                   const std::vector<BenchmarkCost>& existing) {
+  return std::all_of(batch.jobs.begin(), batch.jobs.end(), [&](const Job& job) {
+    return std::any_of(existing.begin(), existing.end(), [&](const BenchmarkCost& c) {
       return c.scene == batch.scene && c.derivatives == batch.derivatives && c.variant == job.variant &&
              c.params == job.params && c.width == bench.width && c.height == bench.height && c.device == device;
     });
   });
-  if (done) return Ok();
-  progress->current = "benchmark " + batch.scene + " " + batch.derivatives + " (" + std::to_string(batch.jobs.size()) +
-                      " variants at " + std::to_string(bench.width) + "x" + std::to_string(bench.height) + ")";
-  if (options.progress) options.progress(*progress);
-  auto costs = RunBenchmark(batch, bench, options);
-  if (!costs) return costs.failure();
-  if (Status s = store.InsertBenchmarks(*costs); !s) return s;
-  ++summary->benchmarks;
+}
+
+// Times this shard's batches (dealt by index, so each is timed once, whole)
+// that the store lacks.
+Status RunBenchmarks(const std::vector<Job>& all_jobs, const BenchmarkOptions& bench, const RunOptions& options,
+                     ResultStore& store, RunProgress* progress, RunSummary* summary,
+                     std::chrono::steady_clock::time_point start) {
+  auto existing = store.Benchmarks();
+  if (!existing) return existing.failure();
+  const std::string device = BenchmarkDevice(options);
+  const std::vector<BenchmarkBatch> batches = BenchmarkBatches(all_jobs);
+  for (std::size_t b = options.shard_index; b < batches.size(); b += options.shard_count) {
+    const BenchmarkBatch& batch = batches[b];
+    if (BenchmarkDone(batch, bench, device, *existing)) continue;
+    progress->current = "benchmark " + batch.scene + " " + batch.derivatives + " (" +
+                        std::to_string(batch.jobs.size()) + " variants at " + std::to_string(bench.width) + "x" +
+                        std::to_string(bench.height) + ")";
+    progress->elapsed_s = SecondsSince(start);
+    if (options.progress) options.progress(*progress);
+    auto costs = RunBenchmark(batch, bench, options);
+    if (!costs) return costs.failure();
+    if (Status s = store.InsertBenchmarks(*costs); !s) return s;
+    ++summary->benchmarks;
+  }
   return Ok();
 }
 
@@ -307,7 +328,7 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
       ++progress.done;
       progress.skipped = summary.skipped;
       progress.current = what;
-      progress.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      progress.elapsed_s = SecondsSince(start);
       const int workers = std::max(1, options.jobs);
       progress.eta_s =
           summary.computed ? computed_s / summary.computed * (progress.total - progress.done) / workers : 0;
@@ -330,19 +351,15 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
   }
 
   if (options.check_shots) {
-    if (Status s = CheckShots(jobs, options, *store, &progress, &summary); !s) {
+    if (Status s = CheckShots(jobs, options, *store, &progress, &summary, start); !s) {
       summary.error = s.failure();
       return summary;
     }
   }
   if (options.benchmark && options.benchmark->enabled) {
-    // Batches are dealt to shards by index, so each is timed once, whole.
-    const std::vector<BenchmarkBatch> batches = BenchmarkBatches(all_jobs);
-    for (std::size_t b = options.shard_index; b < batches.size(); b += options.shard_count) {
-      if (Status s = EnsureBenchmark(batches[b], *options.benchmark, options, *store, &progress, &summary); !s) {
-        summary.error = s.failure();
-        return summary;
-      }
+    if (Status s = RunBenchmarks(all_jobs, *options.benchmark, options, *store, &progress, &summary, start); !s) {
+      summary.error = s.failure();
+      return summary;
     }
   }
 

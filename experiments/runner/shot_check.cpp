@@ -18,6 +18,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// tv_err below this share of tv_ref counts as no flicker (see CheckShot).
+constexpr double kNegligibleTvErr = 1e-3;
+
 // From zero to anything is as large a change as there is (finite: the store's JSON has no infinity).
 double RelativeChange(double check, double base) {
   if (base == 0) return check == 0 ? 0 : std::numeric_limits<double>::max();
@@ -34,6 +37,19 @@ long long UnconvergedPixels(const fs::path& dir) {
 }
 
 }  // namespace
+
+void JudgeConvergence(ShotCheck& c) {
+  c.d_tv_ref = RelativeChange(c.tv_ref_check, c.tv_ref);
+  c.d_energy_bias = std::abs(c.energy_bias_check - c.energy_bias);
+  // A tv_err far below the reference's own temporal variance is flicker no
+  // filter can remove and no viewer can see (none already matches the
+  // reference); its relative change is measured against that floor, else a
+  // near-zero tv_err made only of reference noise fails the check forever.
+  const double tv_err_floor = kNegligibleTvErr * c.tv_ref;
+  c.d_tv_err = c.tv_err >= tv_err_floor ? RelativeChange(c.tv_err_check, c.tv_err)
+                                        : std::abs(c.tv_err_check - c.tv_err) / tv_err_floor;
+  c.converged = c.d_energy_bias <= c.tol_energy && c.d_tv_ref <= c.tol_tv && c.d_tv_err <= c.tol_tv;
+}
 
 Result<ShotCheck> CheckShot(const Job& shot_job, const RunOptions& options) {
   Job job = shot_job;
@@ -90,12 +106,8 @@ Result<ShotCheck> CheckShot(const Job& shot_job, const RunOptions& options) {
   c.energy_bias_check = at_2n->energy_bias.value_or(0);
   c.tv_err = at_n->tv_err.value_or(0);
   c.tv_err_check = at_2n->tv_err.value_or(0);
-  c.d_tv_ref = RelativeChange(c.tv_ref_check, c.tv_ref);
-  c.d_energy_bias = std::abs(c.energy_bias_check - c.energy_bias);
-  c.d_tv_err = RelativeChange(c.tv_err_check, c.tv_err);
   c.unconverged_pixels = UnconvergedPixels(ref_dir);
-  c.converged = c.d_energy_bias <= c.tol_energy && c.d_tv_ref <= c.tol_tv && c.d_tv_err <= c.tol_tv;
-
+  JudgeConvergence(c);
   std::error_code ec;
   fs::remove_all(none_dir, ec);
   if (!options.keep_frames) fs::remove_all(check_dir, ec);

@@ -83,6 +83,8 @@ Job SpecJob(const Spec& spec, const std::string& scene, const std::string& mater
   job.frames = spec.frames;
   job.fps = spec.fps;
   job.reference = spec.reference;
+  if (auto it = spec.reference_spp_by_material.find(material); it != spec.reference_spp_by_material.end())
+    job.reference.spp = it->second;
   job.metrics = spec.metrics;
   return job;
 }

@@ -1,5 +1,6 @@
 #include "shimmer/experiments/spec.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -285,8 +286,17 @@ Spec ParseSpecObject(const json& j) {
   if (j.contains("reference")) {
     const json& r = j["reference"];
     if (!r.is_object()) throw SpecError{"reference", "must be {\"spp\": N} or {\"tolerance\": T}"};
-    RejectUnknownKeys(r, {"spp", "tolerance", "replicates", "converge"}, "reference");
+    RejectUnknownKeys(r, {"spp", "spp_by_material", "tolerance", "replicates", "converge"}, "reference");
     if (r.contains("spp")) s.reference.spp = PositiveInt(r["spp"], "spp", render::kMaxReferenceSpp);
+    if (r.contains("spp_by_material")) {
+      const json& m = r["spp_by_material"];
+      if (!m.is_object()) throw SpecError{"spp_by_material", "must be {\"MATERIAL\": N, ...}"};
+      for (const auto& [material, spp] : m.items()) {
+        if (std::find(s.materials.begin(), s.materials.end(), material) == s.materials.end())
+          throw SpecError{"spp_by_material", material + ": not one of the spec's materials"};
+        s.reference_spp_by_material[material] = PositiveInt(spp, "spp_by_material", render::kMaxReferenceSpp);
+      }
+    }
     if (r.contains("tolerance")) {
       s.reference.tolerance = Number(r["tolerance"], "tolerance");
       if (s.reference.tolerance <= 0 || s.reference.tolerance >= 1) throw SpecError{"tolerance", "must be in (0, 1)"};

@@ -160,7 +160,9 @@ TEST(RunCli, ShotsAreCheckedAndVariantsBenchmarkedOnce) {
     EXPECT_LE(c.min_ms, c.median_ms);
     EXPECT_GE(c.max_ms, c.median_ms);
     EXPECT_NEAR(c.ratio_to_none, c.median_ms / c.none_median_ms, 1e-12);
-    if (c.variant == "none") EXPECT_DOUBLE_EQ(c.ratio_to_none, 1);
+    if (c.variant == "none") {
+      EXPECT_DOUBLE_EQ(c.ratio_to_none, 1);
+    }
     EXPECT_FALSE(c.device.empty());
   }
   auto rows = (*store)->All();

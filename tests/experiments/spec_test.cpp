@@ -305,6 +305,27 @@ TEST(Spec, ReferenceReplicatesConvergenceAndBenchmarkParse) {
   }
 }
 
+TEST(Spec, ReferenceSppByMaterialGivesSharpMaterialsTheirOwnSampleCount) {
+  const std::string two_materials = R"({"name": "v", "scenes": ["sphere"], "materials": ["ggx:0.01", "ggx:0.2"],
+  "cameras": ["orbit"], "variants": ["none"],
+  "reference": {"spp": 6, "spp_by_material": {"ggx:0.01": 12}}})";
+  auto r = ParseSpec(two_materials, "m.json");
+  ASSERT_TRUE(r) << r.error();
+  const std::vector<Job> jobs = ExpandJobs(*r);
+  ASSERT_EQ(jobs.size(), 2u);
+  for (const Job& j : jobs) EXPECT_EQ(j.reference.spp, j.material == "ggx:0.01" ? 12 : 6) << j.material;
+
+  for (const auto& [tail, expected] : std::vector<std::pair<std::string, std::string>>{
+           {R"(, "reference": {"spp_by_material": {"ggx:0.3": 12}})", "ggx:0.3: not one of the spec's materials"},
+           {R"(, "reference": {"spp_by_material": {"ggx:0.1": 0}})", "spp_by_material: must be an integer"},
+           {R"(, "reference": {"spp_by_material": [12]})", "spp_by_material: must be {"},
+       }) {
+    auto bad = ParseSpec(TrustSpec(tail), "bad.json");
+    ASSERT_FALSE(bad) << tail;
+    EXPECT_NE(bad.error().find(expected), std::string::npos) << bad.error();
+  }
+}
+
 TEST(Spec, BenchmarkBatchesHoldEveryVariantOfAScenesDerivativeSourceWithNoneFirst) {
   auto r = ParseSpec(TrustSpec(""), "v.json");
   ASSERT_TRUE(r) << r.error();

@@ -83,6 +83,9 @@ struct Spec {
   int frames = 32;
   double fps = 30;
   ReferenceQuality reference;
+  // reference.spp_by_material: N per material where the default N is not
+  // enough (sharp highlights need more samples per axis than rough ones).
+  std::map<std::string, int> reference_spp_by_material;
   MetricOptions metrics;
   BenchmarkOptions benchmark;
   std::vector<FitConfig> fits;  // the `fit` section: one object or a list

@@ -1,0 +1,61 @@
+// The verdict of a reference's convergence check, from known numbers.
+#include <gtest/gtest.h>
+
+#include "shimmer/experiments/runner.h"
+
+namespace shimmer::experiments {
+namespace {
+
+ShotCheck Measured(double tv_ref, double tv_ref_check, double bias, double bias_check, double tv_err,
+                   double tv_err_check) {
+  ShotCheck c;
+  c.tv_ref = tv_ref;
+  c.tv_ref_check = tv_ref_check;
+  c.energy_bias = bias;
+  c.energy_bias_check = bias_check;
+  c.tv_err = tv_err;
+  c.tv_err_check = tv_err_check;
+  c.tol_energy = 0.02;
+  c.tol_tv = 0.10;
+  return c;
+}
+
+TEST(ShotCheck, SmallChangesConvergeAndEachLargeOneDoesNot) {
+  ShotCheck ok = Measured(1.0, 1.05, 0.10, 0.11, 0.5, 0.52);
+  JudgeConvergence(ok);
+  EXPECT_NEAR(ok.d_tv_ref, 0.05, 1e-12);
+  EXPECT_NEAR(ok.d_energy_bias, 0.01, 1e-12);
+  EXPECT_NEAR(ok.d_tv_err, 0.04, 1e-12);
+  EXPECT_TRUE(ok.converged);
+
+  ShotCheck tv_ref = Measured(1.0, 1.25, 0.10, 0.10, 0.5, 0.5);
+  JudgeConvergence(tv_ref);
+  EXPECT_FALSE(tv_ref.converged);
+  ShotCheck energy = Measured(1.0, 1.0, 0.10, 0.13, 0.5, 0.5);
+  JudgeConvergence(energy);
+  EXPECT_FALSE(energy.converged);
+  ShotCheck tv_err = Measured(1.0, 1.0, 0.10, 0.10, 0.5, 0.6);
+  JudgeConvergence(tv_err);
+  EXPECT_FALSE(tv_err.converged);
+}
+
+TEST(ShotCheck, ATvErrBelowTheFloorIsJudgedAgainstTheFloorNotItself) {
+  // none matches the reference: tv_err is reference noise, a millionth of
+  // tv_ref, and it drops by a sixth when the reference doubles its samples.
+  ShotCheck tiny = Measured(1.6e-3, 1.6e-3, 0.0, 0.0, 3.0e-9, 2.5e-9);
+  JudgeConvergence(tiny);
+  EXPECT_NEAR(tiny.d_tv_err, 0.5e-9 / 1.6e-6, 1e-9);
+  EXPECT_TRUE(tiny.converged);
+  // Above the floor the same relative change is a change.
+  ShotCheck large = Measured(1.6e-3, 1.6e-3, 0.0, 0.0, 3.0e-5, 2.5e-5);
+  JudgeConvergence(large);
+  EXPECT_NEAR(large.d_tv_err, 1.0 / 6.0, 1e-12);
+  EXPECT_FALSE(large.converged);
+  // A tv_err that appears from nothing is the largest change there is.
+  ShotCheck from_zero = Measured(0.0, 0.0, 0.0, 0.0, 0.0, 1e-3);
+  JudgeConvergence(from_zero);
+  EXPECT_FALSE(from_zero.converged);
+}
+
+}  // namespace
+}  // namespace shimmer::experiments

@@ -11,7 +11,9 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <set>
+#include <tuple>
 
 #include "shimmer/core/atomic_file.h"
 
@@ -64,6 +66,36 @@ struct Statement {
   sqlite3_stmt* stmt = nullptr;
   ~Statement() { sqlite3_finalize(stmt); }
 };
+
+// The JSON column of every row `sql` selects, parsed; a store from before the
+// table existed has none. Nullopt: a row does not parse.
+std::optional<std::vector<nlohmann::json>> JsonRows(sqlite3* db, const char* sql) {
+  std::vector<nlohmann::json> out;
+  Statement s;
+  if (sqlite3_prepare_v2(db, sql, -1, &s.stmt, nullptr) != SQLITE_OK) return out;
+  while (sqlite3_step(s.stmt) == SQLITE_ROW) {
+    const unsigned char* text = sqlite3_column_text(s.stmt, 0);
+    auto j = nlohmann::json::parse(text ? reinterpret_cast<const char*>(text) : "", nullptr, false);
+    if (j.is_discarded() || !j.is_object()) return std::nullopt;
+    out.push_back(std::move(j));
+  }
+  return out;
+}
+
+// Rows of `sql` read back as T (the table's JSON column); `what` names a
+// damaged row in the message.
+template <typename T>
+Result<std::vector<T>> TypedRows(sqlite3* db, const char* sql, const std::string& path, const std::string& what) {
+  auto rows = JsonRows(db, sql);
+  if (!rows) return Result<std::vector<T>>::Failure(path + ": a " + what + " row is damaged");
+  std::vector<T> out;
+  try {
+    for (const nlohmann::json& j : *rows) out.push_back(j.get<T>());
+  } catch (const nlohmann::json::exception&) {
+    return Result<std::vector<T>>::Failure(path + ": a " + what + " row is damaged");
+  }
+  return out;
+}
 
 // Columns of `jobs` in the order Insert writes them; a store from before a
 // column existed reads NULL for it.
@@ -360,13 +392,19 @@ Result<std::vector<JobResult>> ResultStore::Select(const std::string& where, con
   if (!costs) return costs.failure();
   std::map<std::string, const ShotCheck*> shot_of;
   for (const ShotCheck& shot : *shots) shot_of[shot.reference_id] = &shot;
+  // Costs of one (scene, derivative source, variant, parameters), per device.
+  using CostKey = std::tuple<std::string, std::string, std::string, std::map<std::string, double>>;
+  std::map<CostKey, std::vector<const BenchmarkCost*>> costs_of;
+  for (const BenchmarkCost& c : *costs) costs_of[{c.scene, c.derivatives, c.variant, c.params}].push_back(&c);
   for (JobResult& r : rows) {
     if (auto it = shot_of.find(r.reference_id); it != shot_of.end()) r.shot = *it->second;
+    auto it = costs_of.find({r.job.scene, r.job.derivatives, r.job.variant, r.job.params});
+    if (it == costs_of.end()) continue;
     // The cost measured on the row's own device when there is one.
-    for (const BenchmarkCost& c : *costs)
-      if (c.scene == r.job.scene && c.derivatives == r.job.derivatives && c.variant == r.job.variant &&
-          c.params == r.job.params && (!r.cost || (c.device == r.device && r.cost->device != r.device)))
-        r.cost = c;
+    const BenchmarkCost* cost = it->second.front();
+    for (const BenchmarkCost* c : it->second)
+      if (c->device == r.device) cost = c;
+    r.cost = *cost;
   }
   return rows;
 }
@@ -400,21 +438,7 @@ Status ResultStore::InsertShot(const ShotCheck& shot) {
 }
 
 Result<std::vector<ShotCheck>> ResultStore::Shots() {
-  using R = Result<std::vector<ShotCheck>>;
-  std::vector<ShotCheck> out;
-  Statement s;
-  if (sqlite3_prepare_v2(db_, "SELECT check_json FROM shots ORDER BY reference_id", -1, &s.stmt, nullptr) != SQLITE_OK)
-    return out;  // a store from before convergence checks
-  while (sqlite3_step(s.stmt) == SQLITE_ROW) {
-    auto j = nlohmann::json::parse(reinterpret_cast<const char*>(sqlite3_column_text(s.stmt, 0)), nullptr, false);
-    if (j.is_discarded() || !j.is_object()) return R::Failure(path_ + ": a shot row is damaged");
-    try {
-      out.push_back(j.get<ShotCheck>());
-    } catch (const nlohmann::json::exception&) {
-      return R::Failure(path_ + ": a shot row is damaged");
-    }
-  }
-  return out;
+  return TypedRows<ShotCheck>(db_, "SELECT check_json FROM shots ORDER BY reference_id", path_, "shot");
 }
 
 Status ResultStore::InsertBenchmarks(const std::vector<BenchmarkCost>& costs) {
@@ -450,22 +474,8 @@ Status ResultStore::InsertBenchmarks(const std::vector<BenchmarkCost>& costs) {
 }
 
 Result<std::vector<BenchmarkCost>> ResultStore::Benchmarks() {
-  using R = Result<std::vector<BenchmarkCost>>;
-  std::vector<BenchmarkCost> out;
-  Statement s;
-  if (sqlite3_prepare_v2(db_, "SELECT cost_json FROM benchmarks ORDER BY scene, derivatives, variant, params, device",
-                         -1, &s.stmt, nullptr) != SQLITE_OK)
-    return out;  // a store from before benchmarks
-  while (sqlite3_step(s.stmt) == SQLITE_ROW) {
-    auto j = nlohmann::json::parse(reinterpret_cast<const char*>(sqlite3_column_text(s.stmt, 0)), nullptr, false);
-    if (j.is_discarded() || !j.is_object()) return R::Failure(path_ + ": a benchmark row is damaged");
-    try {
-      out.push_back(j.get<BenchmarkCost>());
-    } catch (const nlohmann::json::exception&) {
-      return R::Failure(path_ + ": a benchmark row is damaged");
-    }
-  }
-  return out;
+  return TypedRows<BenchmarkCost>(
+      db_, "SELECT cost_json FROM benchmarks ORDER BY scene, derivatives, variant, params, device", path_, "benchmark");
 }
 
 Status ResultStore::InsertFit(const std::string& variant, const std::string& param, const std::string& material,
@@ -490,18 +500,10 @@ Status ResultStore::InsertFit(const std::string& variant, const std::string& par
 }
 
 Result<std::vector<nlohmann::json>> ResultStore::Fits() {
-  std::vector<nlohmann::json> out;
-  Statement s;
-  // A store written before any fit ran (or by an older shimmer) may have no fits table.
-  if (sqlite3_prepare_v2(db_, "SELECT result FROM fits ORDER BY variant, param, material", -1, &s.stmt, nullptr) !=
-      SQLITE_OK)
-    return out;
-  while (sqlite3_step(s.stmt) == SQLITE_ROW) {
-    auto j = nlohmann::json::parse(reinterpret_cast<const char*>(sqlite3_column_text(s.stmt, 0)), nullptr, false);
-    if (j.is_discarded()) return Result<std::vector<nlohmann::json>>::Failure(path_ + ": a fit row is damaged");
-    out.push_back(std::move(j));
-  }
-  return out;
+  // A store written before any fit ran (or by an older shimmer) has no fits table.
+  auto rows = JsonRows(db_, "SELECT result FROM fits ORDER BY variant, param, material");
+  if (!rows) return Result<std::vector<nlohmann::json>>::Failure(path_ + ": a fit row is damaged");
+  return *rows;
 }
 
 Result<std::size_t> MergeStores(const std::vector<std::string>& inputs, const std::string& output) {

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <functional>
 
+#include <opencv2/core.hpp>
+
 namespace shimmer::metrics {
 
 namespace {
@@ -32,14 +34,12 @@ double Quantile(std::vector<double> sorted, double q) {
   return sorted[i] + (at - i) * (sorted[i + 1] - sorted[i]);
 }
 
+// Unbiased sample variance (OpenCV's is the population one).
 double Variance(const std::vector<double>& x) {
   if (x.size() < 2) return 0;
-  double mean = 0;
-  for (double v : x) mean += v;
-  mean /= x.size();
-  double ss = 0;
-  for (double v : x) ss += (v - mean) * (v - mean);
-  return ss / (x.size() - 1);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(x, mean, stddev);
+  return stddev[0] * stddev[0] * static_cast<double>(x.size()) / static_cast<double>(x.size() - 1);
 }
 
 }  // namespace

@@ -11,7 +11,9 @@
 #include "report_document.h"
 #include "report_parts.h"
 #include "shimmer/experiments/csv.h"
+#include "job_results.h"
 #include "shimmer/experiments/job.h"
+#include "temp_dir.h"
 #include "shimmer/experiments/report.h"
 #include "shimmer/renderer/shading.h"
 
@@ -21,38 +23,12 @@ namespace {
 namespace fs = std::filesystem;
 using namespace report;
 
-struct TempDir {
-  fs::path path = fs::temp_directory_path() /
-                  ("shimmer-report-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" +
-                   ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  TempDir() { fs::remove_all(path), fs::create_directories(path); }
-  ~TempDir() { fs::remove_all(path); }
-};
+using shimmer::testing::TempDir;
+using testing::MakeResult;
 
 std::string ReadText(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   return std::string((std::istreambuf_iterator<char>(in)), {});
-}
-
-JobResult MakeResult(const std::string& variant, double fp_max, double tv_ratio) {
-  JobResult r;
-  r.job.scene = "sphere";
-  r.job.material = "ggx:0.02";
-  r.job.camera = "orbit";
-  r.job.variant = variant;
-  r.job.params = {{"fp_max", fp_max}};
-  r.job.derivatives = "quad";
-  r.job.width = r.job.height = 32;
-  r.job.frames = 8;
-  r.job.fps = 30;
-  r.job.reference = {4, 0};
-  r.id = JobId(r.job);
-  r.reference_id = ReferenceId(r.job);
-  r.metrics = {{"tv_ratio", tv_ratio}, {"tv_err", 0.5}, {"flicker", {{"flicker_index", 0.25}}}};
-  r.gpu_ms_per_frame = 1.5;
-  r.revision = "abc";
-  r.core_version = ShadingCoreVersion();
-  return r;
 }
 
 // A row of shot (scene, material) with known tv_err and energy bias; `half`
@@ -408,8 +384,8 @@ TEST(Report, WritesTablesCsvAndPlotScripts) {
   rows[1].job.params = {{"kappa", 0.18}, {"sigma2", 0.25}};  // a JSON field with a comma and quotes
   rows[1].metrics["region"] = "highlight";
   for (JobResult& r : rows) r.device = "gpu, \"fast\"";  // one device: the Pareto plots compare its times
-  ASSERT_TRUE(WriteReport(rows, "t", (dir.path / "rep").string(), &warnings));
-  std::ifstream csv_in(dir.path / "rep" / "report.csv", std::ios::binary);
+  ASSERT_TRUE(WriteReport(rows, "t", (dir.path() / "rep").string(), &warnings));
+  std::ifstream csv_in(dir.path() / "rep" / "report.csv", std::ios::binary);
   const auto csv = ParseCsv(std::string((std::istreambuf_iterator<char>(csv_in)), {}));
   ASSERT_EQ(csv.size(), 4u);
   // The original columns first, in their order; intervals, convergence and benchmark after them.
@@ -431,22 +407,22 @@ TEST(Report, WritesTablesCsvAndPlotScripts) {
   EXPECT_EQ(nlohmann::json::parse((*tk19)[4]), nlohmann::json(rows[1].job.params));
   EXPECT_EQ((*tk19)[6], "highlight");
   EXPECT_EQ((*tk19)[14], rows[1].device);
-  std::ifstream md(dir.path / "rep" / "report.md");
+  std::ifstream md(dir.path() / "rep" / "report.md");
   std::string text((std::istreambuf_iterator<char>(md)), {});
   EXPECT_NE(text.find("## Overview"), std::string::npos);
-  EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_pareto_tv_err.gp"));
-  EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_pareto_relmse.gp"));
-  EXPECT_TRUE(fs::exists(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp"));
+  EXPECT_TRUE(fs::exists(dir.path() / "rep" / "sphere___ggx_0_02___orbit___quad_pareto_tv_err.gp"));
+  EXPECT_TRUE(fs::exists(dir.path() / "rep" / "sphere___ggx_0_02___orbit___quad_pareto_relmse.gp"));
+  EXPECT_TRUE(fs::exists(dir.path() / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp"));
   EXPECT_NE(text.find("| `tk19 kappa=0.18 sigma2=0.25` | highlight |"), std::string::npos) << text;
   // Scripts name their outputs by the final names: rerunning one rebuilds its plot.
-  std::ifstream gp(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp");
+  std::ifstream gp(dir.path() / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp");
   std::string script((std::istreambuf_iterator<char>(gp)), {});
   EXPECT_NE(script.find("set output 'sphere___ggx_0_02___orbit___quad_spectra.svg'"), std::string::npos) << script;
   EXPECT_NE(script.find("noenhanced"), std::string::npos);
-  for (const auto& e : fs::directory_iterator(dir.path / "rep"))  // no staging left behind
+  for (const auto& e : fs::directory_iterator(dir.path() / "rep"))  // no staging left behind
     EXPECT_NE(e.path().filename().string().front(), '.') << e.path();
-  EXPECT_FALSE(WriteReport({}, "t", (dir.path / "empty").string(), &warnings));
-  EXPECT_FALSE(fs::exists(dir.path / "empty"));
+  EXPECT_FALSE(WriteReport({}, "t", (dir.path() / "empty").string(), &warnings));
+  EXPECT_FALSE(fs::exists(dir.path() / "empty"));
 }
 
 // The spectra of a group of twenty variants: twenty different line styles,
@@ -460,8 +436,8 @@ TEST(Report, SpectraOfManyVariantsLookDifferent) {
     rows.push_back(r);
   }
   std::vector<std::string> warnings;
-  ASSERT_TRUE(WriteReport(rows, "t", (dir.path / "rep").string(), &warnings));
-  std::ifstream gp(dir.path / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp");
+  ASSERT_TRUE(WriteReport(rows, "t", (dir.path() / "rep").string(), &warnings));
+  std::ifstream gp(dir.path() / "rep" / "sphere___ggx_0_02___orbit___quad_spectra.gp");
   std::set<std::string> styles;
   for (std::string line; std::getline(gp, line);) {
     const auto lc = line.find("lc rgb");
@@ -487,9 +463,9 @@ TEST(Report, HtmlIsSelfContained) {
       Bench(rows.back(), 1.0 + err);
     }
   std::vector<std::string> warnings;
-  ASSERT_TRUE(WriteReport(rows, "Self <contained>", (dir.path / "rep").string(), &warnings));
-  const std::string html = ReadText(dir.path / "rep" / "report.html");
-  const std::string md = ReadText(dir.path / "rep" / "report.md");
+  ASSERT_TRUE(WriteReport(rows, "Self <contained>", (dir.path() / "rep").string(), &warnings));
+  const std::string html = ReadText(dir.path() / "rep" / "report.html");
+  const std::string md = ReadText(dir.path() / "rep" / "report.md");
   ASSERT_FALSE(html.empty());
   EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
   for (const char* external : {"src=\"http", "href=\"http", "src='http", "href='http", "<script", "<link", "@import"})
@@ -501,7 +477,7 @@ TEST(Report, HtmlIsSelfContained) {
     EXPECT_NE(md.find("# " + std::string(section) + "\n"), std::string::npos) << section;
   }
   EXPECT_NE(html.find("<code>tk21</code>"), std::string::npos);
-  if (fs::exists(dir.path / "rep" / "heatmap.svg")) {  // gnuplot installed: the plots are inlined, not linked
+  if (fs::exists(dir.path() / "rep" / "heatmap.svg")) {  // gnuplot installed: the plots are inlined, not linked
     EXPECT_NE(html.find("<svg"), std::string::npos);
     EXPECT_EQ(html.find("<?xml"), std::string::npos);
     EXPECT_EQ(html.find("<img"), std::string::npos);
@@ -510,7 +486,7 @@ TEST(Report, HtmlIsSelfContained) {
     GTEST_LOG_(INFO) << "gnuplot missing: plots not checked";
   }
   // The heatmap crosses the filter that loses 40 % energy, in both shots.
-  const std::string crosses = ReadText(dir.path / "rep" / "heatmap_crosses.dat");
+  const std::string crosses = ReadText(dir.path() / "rep" / "heatmap_crosses.dat");
   EXPECT_EQ(std::count(crosses.begin(), crosses.end(), '\n'), 3);
 }
 

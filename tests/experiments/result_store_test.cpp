@@ -6,7 +6,9 @@
 #include <fstream>
 #include <set>
 
+#include "job_results.h"
 #include "shimmer/experiments/job.h"
+#include "temp_dir.h"
 #include "shimmer/experiments/result_store.h"
 #include "shimmer/experiments/spec.h"
 
@@ -15,38 +17,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct TempDir {
-  fs::path path = fs::temp_directory_path() /
-                  ("shimmer-store-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" +
-                   ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  TempDir() { fs::remove_all(path), fs::create_directories(path); }
-  ~TempDir() { fs::remove_all(path); }
-};
-
-JobResult MakeResult(const std::string& variant, double fp_max, double tv_ratio) {
-  JobResult r;
-  r.job.scene = "sphere";
-  r.job.material = "ggx:0.02";
-  r.job.camera = "orbit";
-  r.job.variant = variant;
-  r.job.params = {{"fp_max", fp_max}};
-  r.job.derivatives = "quad";
-  r.job.width = r.job.height = 32;
-  r.job.frames = 8;
-  r.job.fps = 30;
-  r.job.reference = {4, 0};
-  r.id = JobId(r.job);
-  r.reference_id = ReferenceId(r.job);
-  r.metrics = {{"tv_ratio", tv_ratio}, {"tv_err", 0.5}, {"flicker", {{"flicker_index", 0.25}}}};
-  r.gpu_ms_per_frame = 1.5;
-  r.revision = "abc";
-  r.core_version = ShadingCoreVersion();
-  return r;
-}
+using shimmer::testing::TempDir;
+using testing::MakeResult;
 
 TEST(ResultStore, InsertThenFindAndReadBack) {
   TempDir dir;
-  auto opened = ResultStore::Open((dir.path / "r.db").string());
+  auto opened = ResultStore::Open((dir.path() / "r.db").string());
   ASSERT_TRUE(opened) << opened.error();
   std::unique_ptr<ResultStore> store = std::move(*opened);
   JobResult r = MakeResult("k16-beckmann-rect", 0.5, 3.0);
@@ -64,15 +40,15 @@ TEST(ResultStore, InsertThenFindAndReadBack) {
   EXPECT_DOUBLE_EQ(rows[0].gpu_ms_per_frame, 1.5);
   // Reopening sees the same row: it was committed.
   store.reset();
-  auto again = ResultStore::Open((dir.path / "r.db").string(), ResultStore::Mode::kReadOnly);
+  auto again = ResultStore::Open((dir.path() / "r.db").string(), ResultStore::Mode::kReadOnly);
   ASSERT_TRUE(again) << again.error();
   EXPECT_TRUE(*(*again)->Has(r.id));
 }
 
 TEST(ResultStore, MergedShardsEqualOneStore) {
   TempDir dir;
-  const std::string a = (dir.path / "a.db").string(), b = (dir.path / "b.db").string();
-  const std::string all = (dir.path / "all.db").string();
+  const std::string a = (dir.path() / "a.db").string(), b = (dir.path() / "b.db").string();
+  const std::string all = (dir.path() / "all.db").string();
   std::vector<JobResult> results;
   for (int i = 0; i < 6; ++i) results.push_back(MakeResult("k16-beckmann-rect", 0.1 * (i + 1), i));
   {
@@ -104,15 +80,15 @@ TEST(ResultStore, MergedShardsEqualOneStore) {
 // leaves the output as it was (here: not there at all).
 TEST(ResultStore, MergeWithABadInputChangesNothing) {
   TempDir dir;
-  const std::string a = (dir.path / "a.db").string(), all = (dir.path / "all.db").string();
+  const std::string a = (dir.path() / "a.db").string(), all = (dir.path() / "all.db").string();
   {
     auto sa = ResultStore::Open(a);
     ASSERT_TRUE(sa);
     ASSERT_TRUE((*sa)->Insert(MakeResult("none", 0, 1)));
   }
-  const std::string junk = (dir.path / "junk.db").string();
+  const std::string junk = (dir.path() / "junk.db").string();
   std::ofstream(junk) << "not a database";
-  for (const std::string& bad : {(dir.path / "missing.db").string(), junk}) {
+  for (const std::string& bad : {(dir.path() / "missing.db").string(), junk}) {
     auto merged = MergeStores({a, bad}, all);
     ASSERT_FALSE(merged);
     EXPECT_NE(merged.error().find(bad), std::string::npos) << merged.error();
@@ -131,7 +107,7 @@ TEST(ResultStore, MergeWithABadInputChangesNothing) {
 // not even on a file the process may not write.
 TEST(ResultStore, ReadOnlyOpenLeavesTheFileUntouched) {
   TempDir dir;
-  const std::string path = (dir.path / "r.db").string();
+  const std::string path = (dir.path() / "r.db").string();
   {
     auto s = ResultStore::Open(path);
     ASSERT_TRUE(s);
@@ -153,13 +129,13 @@ TEST(ResultStore, ReadOnlyOpenLeavesTheFileUntouched) {
   EXPECT_FALSE(fs::exists(path + "-wal"));
   EXPECT_FALSE(fs::exists(path + "-shm"));
   std::filesystem::permissions(path, std::filesystem::perms::owner_all, std::filesystem::perm_options::replace);
-  EXPECT_FALSE(ResultStore::Open((dir.path / "missing.db").string(), ResultStore::Mode::kReadOnly));
-  EXPECT_FALSE(std::filesystem::exists(dir.path / "missing.db"));
+  EXPECT_FALSE(ResultStore::Open((dir.path() / "missing.db").string(), ResultStore::Mode::kReadOnly));
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "missing.db"));
 }
 
 TEST(ResultStore, SecondLockOnAStoreIsRefusedAtOnce) {
   TempDir dir;
-  const std::string path = (dir.path / "r.db").string();
+  const std::string path = (dir.path() / "r.db").string();
   auto first = StoreLock::Acquire(path);
   ASSERT_TRUE(first) << first.error();
   auto second = StoreLock::Acquire(path);
@@ -183,7 +159,7 @@ namespace {
 
 TEST(ResultStore, ShotChecksAndBenchmarksJoinTheirRowsAndMerge) {
   TempDir dir;
-  const std::string a = (dir.path / "a.db").string(), all = (dir.path / "all.db").string();
+  const std::string a = (dir.path() / "a.db").string(), all = (dir.path() / "all.db").string();
   JobResult tk = MakeResult("k16-beckmann-rect", 0.5, 3.0);
   tk.device = "gpu A";
   JobResult none = MakeResult("none", 0, 9.0);

@@ -11,19 +11,6 @@
 
 namespace shimmer::metrics::testing {
 
-TempDir::TempDir() {
-  static std::atomic<int> counter{0};
-  const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
-  path_ = std::filesystem::temp_directory_path() / ("shimmer-metrics-test-" + std::to_string(::getpid()) + "-" +
-                                                    std::to_string(stamp) + "-" + std::to_string(counter++));
-  std::filesystem::create_directories(path_);
-}
-
-TempDir::~TempDir() {
-  std::error_code ec;
-  std::filesystem::remove_all(path_, ec);
-}
-
 void WriteSequence(const std::filesystem::path& dir, const SequenceSpec& spec) {
   std::filesystem::create_directories(dir);
   for (int t = 0; t < spec.frames; ++t) {

@@ -9,22 +9,11 @@
 #include <opencv2/core.hpp>
 
 #include "shimmer/core/exr_output.h"
+#include "temp_dir.h"
 
 namespace shimmer::metrics::testing {
 
-// A fresh directory under the system temp dir, removed with everything in it.
-class TempDir {
- public:
-  TempDir();
-  ~TempDir();
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  std::filesystem::path path_;
-};
+using shimmer::testing::TempDir;
 
 // Value of pixel (x, y) at frame t.
 using PixelFunction = std::function<float(int t, int x, int y)>;

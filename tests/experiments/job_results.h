@@ -1,0 +1,35 @@
+// Store rows with known numbers, for the tests of the store and the report.
+#pragma once
+
+#include <string>
+
+#include "shimmer/experiments/job.h"
+#include "shimmer/experiments/result_store.h"
+#include "shimmer/renderer/shading.h"
+
+namespace shimmer::experiments::testing {
+
+// A finished job of `variant` on sphere / ggx:0.02 / orbit at 32x32x8 with the
+// given fp_max and tv_ratio (tv_err 0.5, flicker_index 0.25, 1.5 ms/frame).
+inline JobResult MakeResult(const std::string& variant, double fp_max, double tv_ratio) {
+  JobResult r;
+  r.job.scene = "sphere";
+  r.job.material = "ggx:0.02";
+  r.job.camera = "orbit";
+  r.job.variant = variant;
+  r.job.params = {{"fp_max", fp_max}};
+  r.job.derivatives = "quad";
+  r.job.width = r.job.height = 32;
+  r.job.frames = 8;
+  r.job.fps = 30;
+  r.job.reference = {4, 0};
+  r.id = JobId(r.job);
+  r.reference_id = ReferenceId(r.job);
+  r.metrics = {{"tv_ratio", tv_ratio}, {"tv_err", 0.5}, {"flicker", {{"flicker_index", 0.25}}}};
+  r.gpu_ms_per_frame = 1.5;
+  r.revision = "abc";
+  r.core_version = ShadingCoreVersion();
+  return r;
+}
+
+}  // namespace shimmer::experiments::testing

@@ -18,7 +18,9 @@ using mat2 = glm::mat<2, 2, real, glm::defaultp>;
 using ivec2 = glm::ivec2;
 
 using glm::abs;
+using glm::asinh;
 using glm::atan;
+using glm::ceil;
 using glm::clamp;
 using glm::cos;
 using glm::cross;
@@ -32,5 +34,6 @@ using glm::min;
 using glm::normalize;
 using glm::pow;
 using glm::sin;
+using glm::sinh;
 using glm::sqrt;
 using glm::tan;

@@ -53,6 +53,7 @@ struct Glsl<float> {
   static float Density(int ndf, glm::vec2 s, glm::vec2 a) { return glsl_f32::slopeDensity(ndf, s, a); }
   static float RectSeed(glm::vec2 c, glm::vec2 a, glm::vec2 f) { return glsl_f32::ggxRectMeanSeed(c, a, f); }
   static float RectStable(glm::vec2 c, glm::vec2 a, glm::vec2 f) { return glsl_f32::ggxRectMeanStable(c, a, f); }
+  static float RectJacobian(glm::vec2 c, glm::vec2 a, glm::vec2 f) { return glsl_f32::ggxRectMeanJacobian(c, a, f); }
 };
 template <>
 struct Glsl<double> {
@@ -64,6 +65,9 @@ struct Glsl<double> {
   static double Density(int ndf, glm::dvec2 s, glm::dvec2 a) { return glsl_f64::slopeDensity(ndf, s, a); }
   static double RectSeed(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) { return glsl_f64::ggxRectMeanSeed(c, a, f); }
   static double RectStable(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) { return glsl_f64::ggxRectMeanStable(c, a, f); }
+  static double RectJacobian(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) {
+    return glsl_f64::ggxRectMeanJacobian(c, a, f);
+  }
 };
 
 }  // namespace
@@ -101,12 +105,17 @@ template <class T>
 T GgxRectMeanStable(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> half_sides) {
   return Glsl<T>::RectStable(centre, alpha, half_sides);
 }
+template <class T>
+T GgxRectMeanJacobian(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> half_sides) {
+  return Glsl<T>::RectJacobian(centre, alpha, half_sides);
+}
 
 #define SHIMMER_INSTANTIATE(T)                                                                                 \
   template FilteredNdf<T> EvaluateVariant<T>(int, Ndf, glm::vec<2, T>, const Footprint<T>&, const Params<T>&); \
   template T SlopeDensity<T>(Ndf, glm::vec<2, T>, glm::vec<2, T>);                                             \
   template T GgxRectMeanSeed<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                               \
-  template T GgxRectMeanStable<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);
+  template T GgxRectMeanStable<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                               \
+  template T GgxRectMeanJacobian<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);
 SHIMMER_INSTANTIATE(float)
 SHIMMER_INSTANTIATE(double)
 #undef SHIMMER_INSTANTIATE
@@ -199,6 +208,7 @@ bool CatalogueMatchesGlsl() {
       {"k16-beckmann-parallelogram", VARIANT_K16_BECKMANN_PARALLELOGRAM},
       {"k16-ggx-rect", VARIANT_K16_GGX_RECT},
       {"k16-ggx-rect-stable", VARIANT_K16_GGX_RECT_STABLE},
+      {"k16-ggx-rect-jacobian", VARIANT_K16_GGX_RECT_JACOBIAN},
       {"k16-ggx-proxy", VARIANT_K16_GGX_PROXY},
       {"tk19", VARIANT_TK19},
       {"tk21", VARIANT_TK21},

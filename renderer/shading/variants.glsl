@@ -16,7 +16,8 @@ const int VARIANT_TK21 = 9;
 const int VARIANT_FILAMENT = 10;
 const int VARIANT_UNITY_HDRP = 11;
 const int VARIANT_GODOT = 12;
-const int VARIANT_COUNT = 13;
+const int VARIANT_K16_GGX_RECT_JACOBIAN = 13;
+const int VARIANT_COUNT = 14;
 
 // What a pixel knows about its neighbourhood. Derivatives are per pixel along
 // screen x and y, from 2x2 quad differences or from ray differentials.
@@ -40,7 +41,7 @@ struct VariantParams {
 };
 
 struct FilteredNdf {
-  real slope_density;  // filtered P22 at hpp
+  real slope_density;  // filtered P22 at hpp (k16-ggx-rect-jacobian: density * h.z^4)
   real density;        // slope_density / h.z^4, the solid-angle NDF D(h)
   vec2 alpha_eff;      // roughness used for the lobe (the material's where not widened)
 };
@@ -211,6 +212,16 @@ FilteredNdf evalVariant(int variant, int ndf, vec2 alpha, ShadingFootprint f, Va
     r.alpha_eff = alpha;
     r.slope_density = ggxRectMeanStable(hpp, alpha, fp);
     r.density = r.slope_density * slopeToSolidAngle(hpp);
+    return r;
+  }
+  if (variant == VARIANT_K16_GGX_RECT_JACOBIAN) {
+    // The footprint mean of D itself (ggx_rect.glsl): no Jacobian of the
+    // centre. slope_density keeps density = slope_density / h.z^4 at hpp.
+    vec2 fp = min(footprintHalfSides(f), vec2(p.fp_max, p.fp_max));
+    FilteredNdf r;
+    r.alpha_eff = alpha;
+    r.density = ggxRectMeanJacobian(hpp, alpha, fp);
+    r.slope_density = r.density / slopeToSolidAngle(hpp);
     return r;
   }
   if (variant == VARIANT_TK19)

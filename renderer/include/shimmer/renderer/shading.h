@@ -59,6 +59,9 @@ template <class T>
 T GgxRectMeanSeed(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> half_sides);
 template <class T>
 T GgxRectMeanStable(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> half_sides);
+// Footprint mean of the solid-angle GGX density P22(s) (1 + |s|^2)^2 (k16-ggx-rect-jacobian).
+template <class T>
+T GgxRectMeanJacobian(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T> half_sides);
 
 // --- Pixel oracle ------------------------------------------------------------
 // The renderer's per-pixel computation (scene.glsl, pixel.glsl) run in double

@@ -185,7 +185,8 @@ real ggxRectMeanStable(vec2 hpp, vec2 roughness, vec2 footprint) {
 // far from the lobe, where P22's |s|^-4 tail meets the Jacobian's |s|^4. At
 // fixed u, A is a constant, so the inner integral over w needs only the means
 // of 1 / q (an arctangent difference, the same dpsi as below) and of 1 / q^2
-// (ggxRectInnerMean's closed form): the rougher axis is always the outer one.
+// (ggxRectInnerMean's closed form): the rougher axis is always the outer one
+// (for isotropic roughness, the narrower in angle, as in the stable rect).
 //
 // The outer integral: a footprint narrow in angle and away from the
 // substitution's pole (width < 0.3 rad, and at least TAN_POLE_WIDTHS widths
@@ -200,7 +201,9 @@ real ggxRectMeanStable(vec2 hpp, vec2 roughness, vec2 footprint) {
 // constants tuned on 20000 random rectangles, worst 5e-6 in double).
 //
 // Bound: relative error <= 1e-4 in float32 against a double adaptive
-// quadrature over the stable rect's grid (tests/shading/ggx_rect_test.cpp).
+// quadrature over the stable rect's grid (tests/shading/ggx_rect_test.cpp;
+// measured 4.8e-7 there, 2.7e-5 over 20000 random rectangles with slopes to
+// 8 and anisotropy to 1000:1).
 // Cost: as the stable rect for narrow footprints (4 inner evaluations); wide
 // ones take 8 per panel, a panel per decade of footprint size over the lobe's
 // on each side of it (64 for a footprint 1e4 lobe widths across).

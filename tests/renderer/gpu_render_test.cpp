@@ -121,7 +121,8 @@ using shading::DerivativeSource;
 
 TEST(GpuOracle, SphereAllDerivativeSources) {
   for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kQuadCoarse, DerivativeSource::kAnalytic})
-    for (const char* v : {"none", "tk19", "k16-ggx-rect-stable", "k16-beckmann-parallelogram", "vlachos15"})
+    for (const char* v :
+         {"none", "tk19", "k16-ggx-rect-stable", "k16-ggx-rect-jacobian", "k16-beckmann-parallelogram", "vlachos15"})
       ExpectMatchesOracle("sphere", v, d);
 }
 
@@ -138,7 +139,7 @@ TEST(GpuOracle, Wires) {
 
 TEST(GpuOracle, BumpyPlane) {
   for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
-    for (const char* v : {"none", "godot", "unity-hdrp", "k16-ggx-rect-stable"})
+    for (const char* v : {"none", "godot", "unity-hdrp", "k16-ggx-rect-stable", "k16-ggx-rect-jacobian"})
       ExpectMatchesOracle("bumpy-plane", v, d, 20.0);
 }
 

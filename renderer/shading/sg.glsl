@@ -74,9 +74,12 @@ vec3 sgIntegral(SG g) {
 vec3 sgInnerProduct(SG a, SG b) {
   real l1 = max(a.sharpness, real(0));
   real l2 = max(b.sharpness, real(0));
-  real lm = length(l1 * a.axis + l2 * b.axis);
+  // |l1 u1 + l2 u2| with weights <= 1 inside the length: its square would
+  // overflow float for sharpnesses beyond ~1e19.
+  real total = l1 + l2;
+  real lm = total > real(0) ? total * length((l1 / total) * a.axis + (l2 / total) * b.axis) : real(0);
   vec3 d = a.axis - b.axis;
-  real sum = lm + l1 + l2;
+  real sum = lm + total;
   // Both lobes constant: the product is their amplitudes over 4 pi.
   real exponent = sum > real(0) ? -l1 * (l2 / sum) * dot(d, d) : real(0);
   return a.amplitude * b.amplitude * (real(4) * PI * exp(exponent) * oneMinusExpNegOver(real(2) * lm));

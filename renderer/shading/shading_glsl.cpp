@@ -1,6 +1,6 @@
 // The GLSL shading core compiled as C++, once per precision.
-#include "shimmer/renderer/shading.h"
 #include "shimmer/renderer/sg.h"
+#include "shimmer/renderer/shading.h"
 
 #include <glm/glm.hpp>
 
@@ -211,16 +211,16 @@ glm::vec<3, T> SpecularTermAsgWarp(const Sg<T>& light, glm::vec<3, T> normal, T 
   return specularTermASGWarp(ToGlsl(light), normal, alpha, view, f0);
 }
 
-#define SHIMMER_INSTANTIATE(T)                                                                                 \
-  template glm::vec<3, T> SgEvaluate<T>(const Sg<T>&, glm::vec<3, T>);                                         \
-  template glm::vec<3, T> SgIntegral<T>(const Sg<T>&);                                                         \
-  template glm::vec<3, T> SgInnerProduct<T>(const Sg<T>&, const Sg<T>&);                                       \
-  template T OneMinusExpNegOver<T>(T);                                                                         \
-  template Sg<T> DistributionTermSg<T>(glm::vec<3, T>, T);                                                     \
-  template Sg<T> WarpDistributionSg<T>(const Sg<T>&, glm::vec<3, T>);                                          \
-  template Asg<T> WarpDistributionAsg<T>(const Sg<T>&, glm::vec<3, T>);                                        \
-  template glm::vec<3, T> AsgEvaluate<T>(const Asg<T>&, glm::vec<3, T>);                                       \
-  template glm::vec<3, T> ConvolveAsgSg<T>(const Asg<T>&, const Sg<T>&);                                       \
+#define SHIMMER_INSTANTIATE(T)                                                                                    \
+  template glm::vec<3, T> SgEvaluate<T>(const Sg<T>&, glm::vec<3, T>);                                            \
+  template glm::vec<3, T> SgIntegral<T>(const Sg<T>&);                                                            \
+  template glm::vec<3, T> SgInnerProduct<T>(const Sg<T>&, const Sg<T>&);                                          \
+  template T OneMinusExpNegOver<T>(T);                                                                            \
+  template Sg<T> DistributionTermSg<T>(glm::vec<3, T>, T);                                                        \
+  template Sg<T> WarpDistributionSg<T>(const Sg<T>&, glm::vec<3, T>);                                             \
+  template Asg<T> WarpDistributionAsg<T>(const Sg<T>&, glm::vec<3, T>);                                           \
+  template glm::vec<3, T> AsgEvaluate<T>(const Asg<T>&, glm::vec<3, T>);                                          \
+  template glm::vec<3, T> ConvolveAsgSg<T>(const Asg<T>&, const Sg<T>&);                                          \
   template glm::vec<3, T> SpecularTermSgWarp<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>, glm::vec<3, T>); \
   template glm::vec<3, T> SpecularTermAsgWarp<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>, glm::vec<3, T>);
 SHIMMER_INSTANTIATE(float)
@@ -231,7 +231,7 @@ SHIMMER_INSTANTIATE(double)
   template FilteredNdf<T> EvaluateVariant<T>(int, Ndf, glm::vec<2, T>, const Footprint<T>&, const Params<T>&); \
   template T SlopeDensity<T>(Ndf, glm::vec<2, T>, glm::vec<2, T>);                                             \
   template T GgxRectMeanSeed<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                               \
-  template T GgxRectMeanStable<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                               \
+  template T GgxRectMeanStable<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                             \
   template T GgxRectMeanJacobian<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);
 SHIMMER_INSTANTIATE(float)
 SHIMMER_INSTANTIATE(double)

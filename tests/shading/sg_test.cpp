@@ -71,8 +71,10 @@ TEST(SgIntegral, ClosedFormMatchesQuadrature) {
   for (double lambda : {0.0, 1e-8, 1e-4, 0.01, 0.05, 0.1, 1.0, 10.0, 100.0, 1e3, 1e4, 1e6}) {
     // cos t - 1 as -2 sin^2(t/2): its rounding times lambda would be noise the
     // adaptive rule cannot converge through.
-    const double q = 2 * kPi * test::Integrate([&](double t) { return std::exp(-2 * lambda * std::pow(std::sin(t / 2), 2)) * std::sin(t); },
-                                               0, kPi, {1 / std::sqrt(lambda + 1e-30)}, 1e-12, 1e-280);
+    const double q =
+        2 * kPi *
+        test::Integrate([&](double t) { return std::exp(-2 * lambda * std::pow(std::sin(t / 2), 2)) * std::sin(t); }, 0,
+                        kPi, {1 / std::sqrt(lambda + 1e-30)}, 1e-12, 1e-280);
     const Sg<double> g{{0, 0, 1}, lambda, {2, 1, 0.5}};
     const dvec3 v = SgIntegral(g);
     EXPECT_NEAR(v.x / (2 * q), 1, 1e-10) << lambda;
@@ -113,8 +115,8 @@ Reference QuadratureInnerProduct(double l1, double l2, double angle) {
   std::vector<double> breaks;
   for (double k : {0.5, 1.0, 2.0, 4.0, 8.0, 16.0})
     if (k * width < kPi) breaks.push_back(k * width);
-  const double scaled = SphereIntegral([&](dvec3 d) { return std::exp(exponent(d) - e_peak); }, frame, kPi, breaks,
-                                       FullCircle(), {0.0});
+  const double scaled =
+      SphereIntegral([&](dvec3 d) { return std::exp(exponent(d) - e_peak); }, frame, kPi, breaks, FullCircle(), {0.0});
   return {scaled, e_peak};
 }
 
@@ -141,9 +143,10 @@ TEST(SgInnerProduct, MatchesQuadratureToOneInAMillion) {
         EXPECT_LT(rel, 1e-6) << "l1 " << l1 << " l2 " << l2 << " angle " << angle;
         EXPECT_NEAR(v.z / v.x, 3, 1e-12);
       }
-  std::printf("SG inner product, double: worst relative error %.2g against quadrature (sharpness 0.01..1e4, "
-              "angle 0..pi; %d cases below 1e-290 underflow with the quadrature)\n",
-              worst, underflowed);
+  std::printf(
+      "SG inner product, double: worst relative error %.2g against quadrature (sharpness 0.01..1e4, "
+      "angle 0..pi; %d cases below 1e-290 underflow with the quadrature)\n",
+      worst, underflowed);
 }
 
 TEST(SgInnerProduct, FiniteForHugeSharpness) {
@@ -152,8 +155,8 @@ TEST(SgInnerProduct, FiniteForHugeSharpness) {
       const dvec3 u2(std::sin(angle), 0, std::cos(angle));
       const dvec3 d = SgInnerProduct(Sg<double>{{0, 0, 1}, l, {1, 1, 1}}, Sg<double>{u2, 2 * l, {1, 1, 1}});
       EXPECT_TRUE(std::isfinite(d.x) && d.x >= 0) << l << " " << angle;
-      const glm::vec3 f = SgInnerProduct(Sg<float>{{0, 0, 1}, float(l), {1, 1, 1}},
-                                         Sg<float>{glm::vec3(u2), float(2 * l), {1, 1, 1}});
+      const glm::vec3 f =
+          SgInnerProduct(Sg<float>{{0, 0, 1}, float(l), {1, 1, 1}}, Sg<float>{glm::vec3(u2), float(2 * l), {1, 1, 1}});
       EXPECT_TRUE(std::isfinite(f.x) && f.x >= 0) << l << " " << angle;
       // Coaxial: 2 pi / (l1 + l2) to rounding.
       if (angle == 0) {
@@ -235,7 +238,8 @@ TEST(DistributionTermSg, NormalisationAndDistanceToGgxAndBeckmann) {
 
 template <class T>
 void ExpectFinite(const glm::vec<3, T>& v, const char* what, double a, double nv) {
-  EXPECT_TRUE(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z)) << what << " alpha " << a << " n.v " << nv;
+  EXPECT_TRUE(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z))
+      << what << " alpha " << a << " n.v " << nv;
 }
 
 template <class T>
@@ -317,9 +321,8 @@ double QuadratureAsgSg(const Asg<double>& g, const Sg<double>& s) {
     breaks.push_back(offset + k * width);
   }
   const double phi_axis = std::atan2(glm::dot(s.axis, g.basis_y), glm::dot(s.axis, g.basis_x));
-  return SphereIntegral(
-      [&](dvec3 d) { return AsgValue(g, d) * std::exp(s.sharpness * (glm::dot(s.axis, d) - 1)); }, frame, kPi / 2,
-      breaks, FullCircle(), {-kPi / 2, 0.0, kPi / 2, phi_axis}, 1e-8);
+  return SphereIntegral([&](dvec3 d) { return AsgValue(g, d) * std::exp(s.sharpness * (glm::dot(s.axis, d) - 1)); },
+                        frame, kPi / 2, breaks, FullCircle(), {-kPi / 2, 0.0, kPi / 2, phi_axis}, 1e-8);
 }
 
 // ASG sharpness ly, anisotropy lx / ly, SG nu / ly (nu = lambda_SG / 2), and
@@ -329,8 +332,9 @@ TEST(AsgSgConvolution, XuPlanarApproximationError) {
   const double lys[] = {1, 10, 100, 1000};
   const double anisotropies[] = {1, 4, 16, 64};
   const double nu_ratios[] = {0.1, 1, 10};
-  std::printf("ASG x SG (Xu et al. 2013, seed 004) vs quadrature: worst |relative error| over anisotropy "
-              "lx/ly in {1,4,16,64}, at the ASG's centre and at the e^-1 points across / along\n");
+  std::printf(
+      "ASG x SG (Xu et al. 2013, seed 004) vs quadrature: worst |relative error| over anisotropy "
+      "lx/ly in {1,4,16,64}, at the ASG's centre and at the e^-1 points across / along\n");
   std::printf("  ly      centre: nu/ly=0.1  1         10        e^-1: nu/ly=0.1  1         10\n");
   double worst[4][3][2] = {};  // [ly][nu ratio][centre, e^-1 points]
   for (int i = 0; i < 4; ++i) {
@@ -345,8 +349,7 @@ TEST(AsgSgConvolution, XuPlanarApproximationError) {
         // Offsets where the convolved lobe exp(-l' t^2) falls to e^-1, l' = nu l / (nu + l).
         const double off_x = std::min(1 / std::sqrt(nu * g.sharpness_x / (nu + g.sharpness_x)), 1.5);
         const double off_y = std::min(1 / std::sqrt(nu * g.sharpness_y / (nu + g.sharpness_y)), 1.5);
-        const dvec3 axes[3] = {
-            {0, 0, 1}, {std::sin(off_x), 0, std::cos(off_x)}, {0, std::sin(off_y), std::cos(off_y)}};
+        const dvec3 axes[3] = {{0, 0, 1}, {std::sin(off_x), 0, std::cos(off_x)}, {0, std::sin(off_y), std::cos(off_y)}};
         for (int k = 0; k < 3; ++k) {
           const Sg<double> s{axes[k], 2 * nu, dvec3(1)};
           const double rel = std::abs(ConvolveAsgSg(g, s).x / QuadratureAsgSg(g, s) - 1);
@@ -359,7 +362,9 @@ TEST(AsgSgConvolution, XuPlanarApproximationError) {
   }
   // Documented bounds (docs/renderer.md): the planar approximation converges
   // like 1 / sharpness as the lobes sharpen; broad lobes are off by tens of percent.
-  auto worst_at = [&](int i, int where) { return std::max({worst[i][0][where], worst[i][1][where], worst[i][2][where]}); };
+  auto worst_at = [&](int i, int where) {
+    return std::max({worst[i][0][where], worst[i][1][where], worst[i][2][where]});
+  };
   EXPECT_LT(worst_at(3, 0), 2e-4);
   EXPECT_LT(worst_at(3, 1), 5e-3);
   EXPECT_LT(worst_at(2, 0), 2e-3);
@@ -485,13 +490,15 @@ TEST(SgSpecular, SeedsApproximationsAgainstQuadratureOfTheGgxBrdf) {
     };
     print("SpecularTermSGWarp: relative error at the highlight peak", &SpecularErrors::sg_peak, "  %+9.3f ");
     print("SpecularTermASGWarp: relative error at the highlight peak", &SpecularErrors::asg_peak, "  %+9.3f ");
-    print("SpecularTermSGWarp: L1 profile error over the cross of light directions", &SpecularErrors::sg_profile, "  %9.3f  ");
-    print("SpecularTermASGWarp: L1 profile error over the cross of light directions", &SpecularErrors::asg_profile, "  %9.3f  ");
+    print("SpecularTermSGWarp: L1 profile error over the cross of light directions", &SpecularErrors::sg_profile,
+          "  %9.3f  ");
+    print("SpecularTermASGWarp: L1 profile error over the cross of light directions", &SpecularErrors::asg_profile,
+          "  %9.3f  ");
     for (size_t i = 0; i < table.size(); ++i)
       for (size_t j = 0; j < table[i].size(); ++j) {
         const SpecularErrors& e = table[i][j];
-        const std::string at = "alpha " + std::to_string(alphas[i]) + " view " + std::to_string(views[j]) +
-                               " light " + std::to_string(light_sharpness);
+        const std::string at = "alpha " + std::to_string(alphas[i]) + " view " + std::to_string(views[j]) + " light " +
+                               std::to_string(light_sharpness);
         // Loose sanity: within a factor of a few of the BRDF everywhere.
         EXPECT_GT(e.sg_peak, -0.5) << at;
         EXPECT_LT(e.sg_peak, 2) << at;
@@ -567,9 +574,8 @@ TEST(SgFloat, AgreesWithDouble) {
     for (double l2 : {0.01, 1.0, 100.0, 1e4})
       for (double angle : {0.0, 1e-3, 0.01, 0.1, 1.0, 3.0}) {
         const glm::vec3 u1(0, 0, 1), u2 = glm::normalize(glm::vec3(float(std::sin(angle)), 0, float(std::cos(angle))));
-        const double d = SgInnerProduct(Sg<double>{dvec3(u1), float(l1), {1, 1, 1}},
-                                        Sg<double>{dvec3(u2), float(l2), {1, 1, 1}})
-                             .x;
+        const double d =
+            SgInnerProduct(Sg<double>{dvec3(u1), float(l1), {1, 1, 1}}, Sg<double>{dvec3(u2), float(l2), {1, 1, 1}}).x;
         const float f = SgInnerProduct(Sg<float>{u1, float(l1), {1, 1, 1}}, Sg<float>{u2, float(l2), {1, 1, 1}}).x;
         const float seed = SeedInnerProductFloat(u1, float(l1), u2, float(l2));
         if (d < 1e-30) {
@@ -591,7 +597,8 @@ TEST(SgFloat, AgreesWithDouble) {
           Asg<float> g;
           g.sharpness_x = float(r * ly);
           g.sharpness_y = float(ly);
-          const glm::vec3 axis = glm::normalize(glm::vec3(float(std::sin(off)), 0.3f * float(off), float(std::cos(off))));
+          const glm::vec3 axis =
+              glm::normalize(glm::vec3(float(std::sin(off)), 0.3f * float(off), float(std::cos(off))));
           const Sg<float> sf{axis, float(2 * nr * ly), {1, 1, 1}};
           Asg<double> gd{dvec3(g.basis_x), dvec3(g.basis_y), dvec3(g.basis_z), g.sharpness_x, g.sharpness_y, {1, 1, 1}};
           const double d = ConvolveAsgSg(gd, Sg<double>{dvec3(axis), sf.sharpness, {1, 1, 1}}).x;
@@ -602,16 +609,18 @@ TEST(SgFloat, AgreesWithDouble) {
   for (double a : {1e-3, 0.05, 0.2, 0.8})
     for (double view : {0.0, 30.0, 60.0, 85.0, 89.9}) {
       const glm::vec3 n(0, 0, 1);
-      const glm::vec3 v = glm::normalize(glm::vec3(float(std::sin(view * kPi / 180)), 0, float(std::cos(view * kPi / 180))));
+      const glm::vec3 v =
+          glm::normalize(glm::vec3(float(std::sin(view * kPi / 180)), 0, float(std::cos(view * kPi / 180))));
       const Sg<float> ndf = DistributionTermSg(n, float(a));
       const Sg<double> ndf_d = DistributionTermSg(dvec3(n), double(float(a)));
       const Sg<float> wf = WarpDistributionSg(ndf, v);
       const Sg<double> wd = WarpDistributionSg(ndf_d, dvec3(v));
       const Asg<float> af = WarpDistributionAsg(ndf, v);
       const Asg<double> ad = WarpDistributionAsg(ndf_d, dvec3(v));
-      worst_warp = std::max({worst_warp, std::abs(wf.sharpness / wd.sharpness - 1),
-                             std::abs(af.sharpness_x / ad.sharpness_x - 1), std::abs(af.sharpness_y / ad.sharpness_y - 1),
-                             double(glm::length(dvec3(wf.axis) - wd.axis)), double(glm::length(dvec3(af.basis_x) - ad.basis_x))});
+      worst_warp = std::max(
+          {worst_warp, std::abs(wf.sharpness / wd.sharpness - 1), std::abs(af.sharpness_x / ad.sharpness_x - 1),
+           std::abs(af.sharpness_y / ad.sharpness_y - 1), double(glm::length(dvec3(wf.axis) - wd.axis)),
+           double(glm::length(dvec3(af.basis_x) - ad.basis_x))});
       for (double ls : {100.0, 1000.0})
         for (double off : {0.0, 0.03, 0.1, 0.3}) {
           const glm::vec3 r(-v.x, 0, v.z);
@@ -622,7 +631,8 @@ TEST(SgFloat, AgreesWithDouble) {
           for (int which = 0; which < 2; ++which) {
             const double d = which ? SpecularTermAsgWarp(ld, dvec3(n), double(float(a)), dvec3(v), dvec3(f0)).x
                                    : SpecularTermSgWarp(ld, dvec3(n), double(float(a)), dvec3(v), dvec3(f0)).x;
-            const float f = which ? SpecularTermAsgWarp(lf, n, float(a), v, f0).x : SpecularTermSgWarp(lf, n, float(a), v, f0).x;
+            const float f =
+                which ? SpecularTermAsgWarp(lf, n, float(a), v, f0).x : SpecularTermSgWarp(lf, n, float(a), v, f0).x;
             if (d < 1e-30) {
               EXPECT_LT(f, 1e-29);
               continue;
@@ -631,9 +641,10 @@ TEST(SgFloat, AgreesWithDouble) {
           }
         }
     }
-  std::printf("float vs double, worst relative difference: SG inner product %.2g (the seed's form in float: %.2g), "
-              "SG integral %.2g, ASG x SG %.2g, warps %.2g, specular terms %.2g\n",
-              worst_inner, worst_seed, worst_integral, worst_conv, worst_warp, worst_spec);
+  std::printf(
+      "float vs double, worst relative difference: SG inner product %.2g (the seed's form in float: %.2g), "
+      "SG integral %.2g, ASG x SG %.2g, warps %.2g, specular terms %.2g\n",
+      worst_inner, worst_seed, worst_integral, worst_conv, worst_warp, worst_spec);
   EXPECT_LT(worst_inner, 1e-5);
   EXPECT_LT(worst_integral, 1e-6);
   EXPECT_LT(worst_conv, 1e-5);

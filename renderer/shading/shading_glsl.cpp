@@ -1,4 +1,5 @@
 // The GLSL shading core compiled as C++, once per precision.
+#include "shimmer/renderer/sg.h"
 #include "shimmer/renderer/shading.h"
 
 #include <glm/glm.hpp>
@@ -110,11 +111,127 @@ T GgxRectMeanJacobian(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T
   return Glsl<T>::RectJacobian(centre, alpha, half_sides);
 }
 
+// --- Spherical Gaussians (sg.glsl) ---------------------------------------------
+
+namespace {
+// The GLSL namespace of each precision; the sg.glsl functions are found by
+// argument-dependent lookup on its SG / ASG types.
+template <class T>
+struct SgGlsl;
+template <>
+struct SgGlsl<float> {
+  using SG = glsl_f32::SG;
+  using ASG = glsl_f32::ASG;
+  static SG Ndf(glm::vec3 n, float a) { return glsl_f32::distributionTermSG(n, a); }
+  static float OneMinusExpNegOver(float y) { return glsl_f32::oneMinusExpNegOver(y); }
+};
+template <>
+struct SgGlsl<double> {
+  using SG = glsl_f64::SG;
+  using ASG = glsl_f64::ASG;
+  static SG Ndf(glm::dvec3 n, double a) { return glsl_f64::distributionTermSG(n, a); }
+  static double OneMinusExpNegOver(double y) { return glsl_f64::oneMinusExpNegOver(y); }
+};
+
+template <class T>
+typename SgGlsl<T>::SG ToGlsl(const Sg<T>& g) {
+  typename SgGlsl<T>::SG r;
+  r.axis = g.axis;
+  r.sharpness = g.sharpness;
+  r.amplitude = g.amplitude;
+  return r;
+}
+template <class T>
+typename SgGlsl<T>::ASG ToGlsl(const Asg<T>& g) {
+  typename SgGlsl<T>::ASG r;
+  r.basisX = g.basis_x;
+  r.basisY = g.basis_y;
+  r.basisZ = g.basis_z;
+  r.sharpnessX = g.sharpness_x;
+  r.sharpnessY = g.sharpness_y;
+  r.amplitude = g.amplitude;
+  return r;
+}
+template <class GlslSg>
+auto FromGlslSg(const GlslSg& g) {
+  using T = decltype(g.sharpness);
+  return Sg<T>{g.axis, g.sharpness, g.amplitude};
+}
+template <class GlslAsg>
+auto FromGlslAsg(const GlslAsg& g) {
+  using T = decltype(g.sharpnessX);
+  return Asg<T>{g.basisX, g.basisY, g.basisZ, g.sharpnessX, g.sharpnessY, g.amplitude};
+}
+}  // namespace
+
+template <class T>
+glm::vec<3, T> SgEvaluate(const Sg<T>& sg, glm::vec<3, T> dir) {
+  return sgEvaluate(ToGlsl(sg), dir);
+}
+template <class T>
+glm::vec<3, T> SgIntegral(const Sg<T>& sg) {
+  return sgIntegral(ToGlsl(sg));
+}
+template <class T>
+glm::vec<3, T> SgInnerProduct(const Sg<T>& a, const Sg<T>& b) {
+  return sgInnerProduct(ToGlsl(a), ToGlsl(b));
+}
+template <class T>
+T OneMinusExpNegOver(T y) {
+  return SgGlsl<T>::OneMinusExpNegOver(y);
+}
+template <class T>
+Sg<T> DistributionTermSg(glm::vec<3, T> normal, T alpha) {
+  return FromGlslSg(SgGlsl<T>::Ndf(normal, alpha));
+}
+template <class T>
+Sg<T> WarpDistributionSg(const Sg<T>& ndf, glm::vec<3, T> view) {
+  return FromGlslSg(warpDistributionSG(ToGlsl(ndf), view));
+}
+template <class T>
+Asg<T> WarpDistributionAsg(const Sg<T>& ndf, glm::vec<3, T> view) {
+  return FromGlslAsg(warpDistributionASG(ToGlsl(ndf), view));
+}
+template <class T>
+glm::vec<3, T> AsgEvaluate(const Asg<T>& asg, glm::vec<3, T> dir) {
+  return asgEvaluate(ToGlsl(asg), dir);
+}
+template <class T>
+glm::vec<3, T> ConvolveAsgSg(const Asg<T>& asg, const Sg<T>& sg) {
+  return convolveASG_SG(ToGlsl(asg), ToGlsl(sg));
+}
+template <class T>
+glm::vec<3, T> SpecularTermSgWarp(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3, T> view,
+                                  glm::vec<3, T> f0) {
+  return specularTermSGWarp(ToGlsl(light), normal, alpha, view, f0);
+}
+template <class T>
+glm::vec<3, T> SpecularTermAsgWarp(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3, T> view,
+                                   glm::vec<3, T> f0) {
+  return specularTermASGWarp(ToGlsl(light), normal, alpha, view, f0);
+}
+
+#define SHIMMER_INSTANTIATE(T)                                                                                    \
+  template glm::vec<3, T> SgEvaluate<T>(const Sg<T>&, glm::vec<3, T>);                                            \
+  template glm::vec<3, T> SgIntegral<T>(const Sg<T>&);                                                            \
+  template glm::vec<3, T> SgInnerProduct<T>(const Sg<T>&, const Sg<T>&);                                          \
+  template T OneMinusExpNegOver<T>(T);                                                                            \
+  template Sg<T> DistributionTermSg<T>(glm::vec<3, T>, T);                                                        \
+  template Sg<T> WarpDistributionSg<T>(const Sg<T>&, glm::vec<3, T>);                                             \
+  template Asg<T> WarpDistributionAsg<T>(const Sg<T>&, glm::vec<3, T>);                                           \
+  template glm::vec<3, T> AsgEvaluate<T>(const Asg<T>&, glm::vec<3, T>);                                          \
+  template glm::vec<3, T> ConvolveAsgSg<T>(const Asg<T>&, const Sg<T>&);                                          \
+  template glm::vec<3, T> SpecularTermSgWarp<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>, glm::vec<3, T>); \
+  template glm::vec<3, T> SpecularTermAsgWarp<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>, glm::vec<3, T>);
+SHIMMER_INSTANTIATE(float)
+SHIMMER_INSTANTIATE(double)
+#undef SHIMMER_INSTANTIATE
+
 #define SHIMMER_INSTANTIATE(T)                                                                                 \
   template FilteredNdf<T> EvaluateVariant<T>(int, Ndf, glm::vec<2, T>, const Footprint<T>&, const Params<T>&); \
   template T SlopeDensity<T>(Ndf, glm::vec<2, T>, glm::vec<2, T>);                                             \
   template T GgxRectMeanSeed<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                               \
-  template T GgxRectMeanStable<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                               \
+  template T GgxRectMeanStable<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                             \
   template T GgxRectMeanJacobian<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);
 SHIMMER_INSTANTIATE(float)
 SHIMMER_INSTANTIATE(double)

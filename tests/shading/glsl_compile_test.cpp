@@ -44,6 +44,31 @@ void main() {
 }
 )";
 
+// The same for the spherical-Gaussian functions of sg.glsl, which no kernel calls yet.
+const char* kSgKernel = R"(#version 460
+#extension GL_GOOGLE_include_directive : require
+#define real float
+#include "core.glsl"
+layout(local_size_x = 8) in;
+layout(std430, binding = 0) buffer Out { vec4 values[]; };
+void main() {
+  uint i = gl_GlobalInvocationID.x;
+  SG light;
+  light.axis = normalize(vec3(0.1 * float(i), 0.2, 1.0));
+  light.sharpness = 100.0;
+  light.amplitude = vec3(1.0, 2.0, 3.0);
+  vec3 n = vec3(0.0, 0.0, 1.0);
+  vec3 v = normalize(vec3(0.5, 0.0, 0.01 * float(i)));
+  vec3 f0 = vec3(0.04);
+  SG ndf = distributionTermSG(n, 0.1);
+  ASG warped = warpDistributionASG(ndf, v);
+  vec3 a = specularTermSGWarp(light, n, 0.1, v, f0) + specularTermASGWarp(light, n, 0.1, v, f0) +
+           sgInnerProduct(warpDistributionSG(ndf, v), light) + convolveASG_SG(warped, light) +
+           sgIntegral(light) + sgEvaluate(light, v) + asgEvaluate(warped, v);
+  values[i] = vec4(a, 1.0);
+}
+)";
+
 // The project's GLSL as it is in the source tree: every *.glsl under
 // renderer/shading and every *.comp under renderer/shaders, so that a new file
 // is covered without touching this test.
@@ -151,6 +176,13 @@ TEST(GlslCompile, KernelCallingEveryVariantCompiles) {
   ASSERT_TRUE(r.ok()) << r.error();
   ASSERT_GT(r->size(), 100u);
   EXPECT_EQ((*r)[0], 0x07230203u);  // SPIR-V magic
+}
+
+TEST(GlslCompile, KernelCallingTheSgFunctionsCompiles) {
+  auto r = CompileCompute({"sg.comp", kSgKernel});
+  ASSERT_TRUE(r.ok()) << r.error();
+  ASSERT_GT(r->size(), 100u);
+  EXPECT_EQ((*r)[0], 0x07230203u);
 }
 
 TEST(GlslCompile, ErrorNamesFileAndLine) {

@@ -1,6 +1,8 @@
 #include "shimmer/experiments/job.h"
 
 #include <cstdio>
+#include <set>
+#include <vector>
 
 #include "shimmer/renderer/shading.h"
 
@@ -119,12 +121,36 @@ std::string Fnv1a64Hex(std::string_view text) {
   return buf;
 }
 
+std::string CoreVersionOf(std::span<const std::pair<std::string_view, std::string_view>> sources,
+                          std::string_view root) {
+  // The files the render kernel compiles: `root` and what it #includes,
+  // transitively. A file that is embedded but not yet included (a library
+  // no variant calls) renders no pixel, so it moves no job id.
+  std::set<std::string_view> reached{root};
+  std::vector<std::string_view> pending{root};
+  while (!pending.empty()) {
+    const std::string_view name = pending.back();
+    pending.pop_back();
+    for (const auto& [file, text] : sources) {
+      if (file != name) continue;
+      std::size_t at = 0;
+      while ((at = text.find("#include \"", at)) != std::string_view::npos) {
+        at += 10;
+        const std::size_t end = text.find('"', at);
+        if (end == std::string_view::npos) break;
+        const std::string_view included = text.substr(at, end - at);
+        if (reached.insert(included).second) pending.push_back(included);
+      }
+    }
+  }
+  std::string all;
+  for (const auto& [name, text] : sources)
+    if (reached.count(name)) all.append(name).append(text);
+  return Fnv1a64Hex(all);
+}
+
 std::string ShadingCoreVersion() {
-  static const std::string version = [] {
-    std::string all;
-    for (const auto& [name, text] : shading::GlslSources()) all.append(name).append(text);
-    return Fnv1a64Hex(all);
-  }();
+  static const std::string version = CoreVersionOf(shading::GlslSources(), "core.glsl");
   return version;
 }
 

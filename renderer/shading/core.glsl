@@ -5,6 +5,5 @@
 #include "ggx_rect.glsl"
 #include "variants.glsl"
 #include "brdf.glsl"
-#include "sg.glsl"
 #include "scene.glsl"
 #include "pixel.glsl"

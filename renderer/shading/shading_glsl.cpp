@@ -24,6 +24,9 @@ vec4 sceneWord(int i) {
   return g_scene_words[std::size_t(i)];
 }
 #include "core.glsl"
+// Not in core.glsl until a variant calls it: the render kernel, and with it
+// every job id, stays as it is (ShadingCoreVersion hashes what core includes).
+#include "sg.glsl"
 }  // namespace glsl_f32
 
 namespace glsl_f64 {
@@ -34,6 +37,7 @@ vec4 sceneWord(int i) {
   return vec4(g_scene_words[std::size_t(i)]);
 }
 #include "core.glsl"
+#include "sg.glsl"
 }  // namespace glsl_f64
 
 static_assert(kPixelCandidates == glsl_f32::PIXEL_CANDIDATES);

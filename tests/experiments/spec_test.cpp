@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <set>
+#include <string_view>
+#include <utility>
+#include <vector>
 
 #include "shimmer/experiments/job.h"
 #include "shimmer/experiments/runner.h"
@@ -54,6 +57,26 @@ TEST(Spec, ParsesAndExpandsTheCrossProduct) {
 // the parameter resolution or the hash shows up as this failure (and then
 // means: every store's rows are recomputed). The shading core's own version is
 // fixed too, since every GLSL edit changes it by design.
+TEST(Spec, CoreVersionHashesWhatTheRootIncludesAndNothingElse) {
+  using Sources = std::vector<std::pair<std::string_view, std::string_view>>;
+  const Sources core{{"core.glsl", "#include \"a.glsl\"\n"}, {"a.glsl", "#include \"b.glsl\"\nfloat a;\n"},
+                     {"b.glsl", "float b;\n"}};
+  // Every file reached, in the sources' order: the hash of all of them.
+  EXPECT_EQ(CoreVersionOf(core, "core.glsl"),
+            Fnv1a64Hex("core.glsl#include \"a.glsl\"\na.glsl#include \"b.glsl\"\nfloat a;\nb.glslfloat b;\n"));
+  // A library no kernel includes yet moves no id; once included, it does.
+  Sources with_library = core;
+  with_library.push_back({"sg.glsl", "float sg;\n"});
+  EXPECT_EQ(CoreVersionOf(with_library, "core.glsl"), CoreVersionOf(core, "core.glsl"));
+  Sources included = with_library;
+  included[2] = {"b.glsl", "#include \"sg.glsl\"\nfloat b;\n"};
+  EXPECT_NE(CoreVersionOf(included, "core.glsl"), CoreVersionOf(core, "core.glsl"));
+  // A change in a transitively included file moves it.
+  Sources edited = core;
+  edited[2] = {"b.glsl", "float b2;\n"};
+  EXPECT_NE(CoreVersionOf(edited, "core.glsl"), CoreVersionOf(core, "core.glsl"));
+}
+
 TEST(Spec, IdsAreStable) {
   // FNV-1a 64, the published test vectors.
   EXPECT_EQ(Fnv1a64Hex(""), "cbf29ce484222325");

@@ -5,8 +5,10 @@
 
 #include <cstdint>
 #include <map>
+#include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -58,6 +60,11 @@ std::string ReferenceId(const Job& job);
 
 // Hash of the GLSL shading core text: changes whenever the filter math does.
 std::string ShadingCoreVersion();
+// The hash of `root` and every source it includes, transitively, in the
+// order of `sources` (name then text of each); sources outside that closure
+// do not count.
+std::string CoreVersionOf(std::span<const std::pair<std::string_view, std::string_view>> sources,
+                          std::string_view root);
 
 // Jobs with index % n == i (i in [0, n)). Parses "i/n"; returns false on bad input.
 bool ParseShard(const std::string& text, int* index, int* count);

@@ -12,11 +12,12 @@ plot 'wires___ggx_0_02___orbit___quad_spectra.dat' index 0 using 1:2 with lines 
      'wires___ggx_0_02___orbit___quad_spectra.dat' index 4 using 1:2 with lines lw 1.5 lc rgb '#9467bd' dt 1 title 'k16-beckmann-rect fp_max=1', \
      'wires___ggx_0_02___orbit___quad_spectra.dat' index 5 using 1:2 with lines lw 1.5 lc rgb '#8c564b' dt 1 title 'k16-ggx-proxy', \
      'wires___ggx_0_02___orbit___quad_spectra.dat' index 6 using 1:2 with lines lw 1.5 lc rgb '#e377c2' dt 1 title 'k16-ggx-rect', \
-     'wires___ggx_0_02___orbit___quad_spectra.dat' index 7 using 1:2 with lines lw 1.5 lc rgb '#7f7f7f' dt 1 title 'k16-ggx-rect-stable', \
-     'wires___ggx_0_02___orbit___quad_spectra.dat' index 8 using 1:2 with lines lw 1.5 lc rgb '#bcbd22' dt 1 title 'none', \
-     'wires___ggx_0_02___orbit___quad_spectra.dat' index 9 using 1:2 with lines lw 1.5 lc rgb '#17becf' dt 1 title 'supersample-2', \
-     'wires___ggx_0_02___orbit___quad_spectra.dat' index 10 using 1:2 with lines lw 1.5 lc rgb '#aec7e8' dt 1 title 'tk19', \
-     'wires___ggx_0_02___orbit___quad_spectra.dat' index 11 using 1:2 with lines lw 1.5 lc rgb '#ffbb78' dt 1 title 'tk21', \
-     'wires___ggx_0_02___orbit___quad_spectra.dat' index 12 using 1:2 with lines lw 1.5 lc rgb '#98df8a' dt 1 title 'toksvig-quad', \
-     'wires___ggx_0_02___orbit___quad_spectra.dat' index 13 using 1:2 with lines lw 1.5 lc rgb '#ff9896' dt 1 title 'unity-hdrp', \
-     'wires___ggx_0_02___orbit___quad_spectra.dat' index 14 using 1:2 with lines lw 1.5 lc rgb '#c5b0d5' dt 1 title 'vlachos15'
+     'wires___ggx_0_02___orbit___quad_spectra.dat' index 7 using 1:2 with lines lw 1.5 lc rgb '#7f7f7f' dt 1 title 'k16-ggx-rect-jacobian', \
+     'wires___ggx_0_02___orbit___quad_spectra.dat' index 8 using 1:2 with lines lw 1.5 lc rgb '#bcbd22' dt 1 title 'k16-ggx-rect-stable', \
+     'wires___ggx_0_02___orbit___quad_spectra.dat' index 9 using 1:2 with lines lw 1.5 lc rgb '#17becf' dt 1 title 'none', \
+     'wires___ggx_0_02___orbit___quad_spectra.dat' index 10 using 1:2 with lines lw 1.5 lc rgb '#aec7e8' dt 1 title 'supersample-2', \
+     'wires___ggx_0_02___orbit___quad_spectra.dat' index 11 using 1:2 with lines lw 1.5 lc rgb '#ffbb78' dt 1 title 'tk19', \
+     'wires___ggx_0_02___orbit___quad_spectra.dat' index 12 using 1:2 with lines lw 1.5 lc rgb '#98df8a' dt 1 title 'tk21', \
+     'wires___ggx_0_02___orbit___quad_spectra.dat' index 13 using 1:2 with lines lw 1.5 lc rgb '#ff9896' dt 1 title 'toksvig-quad', \
+     'wires___ggx_0_02___orbit___quad_spectra.dat' index 14 using 1:2 with lines lw 1.5 lc rgb '#c5b0d5' dt 1 title 'unity-hdrp', \
+     'wires___ggx_0_02___orbit___quad_spectra.dat' index 15 using 1:2 with lines lw 1.5 lc rgb '#c49c94' dt 1 title 'vlachos15'

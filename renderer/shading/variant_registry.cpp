@@ -67,7 +67,8 @@ std::vector<VariantInfo> BuildCatalogue() {
       {"k16-ggx-rect-jacobian",
        13,
        "footprint mean of D = P22 (1 + |s|^2)^2 over the same rect, the Jacobian inside the integral instead of "
-       "1 / h.z^4 of the centre; closed form in one axis, Gauss-Legendre on a tangent or sinh substitution in the other, "
+       "1 / h.z^4 of the centre; closed form in one axis, Gauss-Legendre on a tangent or sinh substitution in the "
+       "other, "
        "relative error <= 1e-4 in float",
        "ours, after seed 000",
        {kFpMax1},

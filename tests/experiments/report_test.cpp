@@ -8,14 +8,14 @@
 #include <fstream>
 #include <set>
 
+#include "job_results.h"
 #include "report_document.h"
 #include "report_parts.h"
 #include "shimmer/experiments/csv.h"
-#include "job_results.h"
 #include "shimmer/experiments/job.h"
-#include "temp_dir.h"
 #include "shimmer/experiments/report.h"
 #include "shimmer/renderer/shading.h"
+#include "temp_dir.h"
 
 namespace shimmer::experiments {
 namespace {

@@ -8,9 +8,9 @@
 
 #include "job_results.h"
 #include "shimmer/experiments/job.h"
-#include "temp_dir.h"
 #include "shimmer/experiments/result_store.h"
 #include "shimmer/experiments/spec.h"
+#include "temp_dir.h"
 
 namespace shimmer::experiments {
 namespace {

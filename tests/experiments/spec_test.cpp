@@ -59,8 +59,8 @@ TEST(Spec, ParsesAndExpandsTheCrossProduct) {
 // fixed too, since every GLSL edit changes it by design.
 TEST(Spec, CoreVersionHashesWhatTheRootIncludesAndNothingElse) {
   using Sources = std::vector<std::pair<std::string_view, std::string_view>>;
-  const Sources core{{"core.glsl", "#include \"a.glsl\"\n"}, {"a.glsl", "#include \"b.glsl\"\nfloat a;\n"},
-                     {"b.glsl", "float b;\n"}};
+  const Sources core{
+      {"core.glsl", "#include \"a.glsl\"\n"}, {"a.glsl", "#include \"b.glsl\"\nfloat a;\n"}, {"b.glsl", "float b;\n"}};
   // Every file reached, in the sources' order: the hash of all of them.
   EXPECT_EQ(CoreVersionOf(core, "core.glsl"),
             Fnv1a64Hex("core.glsl#include \"a.glsl\"\na.glsl#include \"b.glsl\"\nfloat a;\nb.glslfloat b;\n"));

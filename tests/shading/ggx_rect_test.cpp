@@ -63,8 +63,8 @@ struct WorstCase {
 };
 
 std::ostream& operator<<(std::ostream& os, const RectCase& c) {
-  return os << "alpha " << c.alpha_x << "," << c.alpha_y << " fp " << c.fx << "," << c.fy << " centre " << c.cx
-            << "," << c.cy;
+  return os << "alpha " << c.alpha_x << "," << c.alpha_y << " fp " << c.fx << "," << c.fy << " centre " << c.cx << ","
+            << c.cy;
 }
 
 template <class Oracle, class Evaluate>
@@ -275,8 +275,8 @@ TEST(GgxRectJacobian, IsTheFootprintMeanOfTheUnfilteredDensity) {
 TEST(GgxRectJacobian, NormalisedInProjectedSolidAngleForSmallFootprints) {
   const Params<double> params = ResolveParams(Info(), {}).value();
   for (glm::dvec2 half : {glm::dvec2(1e-4, 5e-5), glm::dvec2(0.01, 0.004), glm::dvec2(0.05, 0.03)})
-    for (glm::dvec2 alpha : {glm::dvec2(1e-3), glm::dvec2(0.05), glm::dvec2(0.3), glm::dvec2(1.0),
-                             glm::dvec2(0.02, 0.2)}) {
+    for (glm::dvec2 alpha :
+         {glm::dvec2(1e-3), glm::dvec2(0.05), glm::dvec2(0.3), glm::dvec2(1.0), glm::dvec2(0.02, 0.2)}) {
       auto density = [&](double theta, double phi) {
         const double r = std::tan(theta);
         const glm::dvec2 s{r * std::cos(phi), r * std::sin(phi)};
@@ -333,8 +333,8 @@ void ExpectFiniteAndPositive() {
           for (T fy : {T(0), T(1e-6), fx, big}) {
             const glm::vec<2, T> alpha{a, ay}, c{s, -s / T(3)}, f{fx, fy};
             const T v = GgxRectMeanJacobian<T>(c, alpha, f);
-            ASSERT_TRUE(std::isfinite(v) && v > 0) << "alpha " << a << "," << ay << " slope " << s << " fp " << fx
-                                                   << "," << fy << " -> " << v;
+            ASSERT_TRUE(std::isfinite(v) && v > 0)
+                << "alpha " << a << "," << ay << " slope " << s << " fp " << fx << "," << fy << " -> " << v;
             EXPECT_EQ(GgxRectMeanJacobian<T>(-c, alpha, -f), v);
             ++checked;
           }

@@ -149,14 +149,17 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// One check per shot (reference id) of these jobs that the store lacks, on
-// `options.jobs` workers.
-Status CheckShots(const std::vector<Job>& jobs, const RunOptions& options, ResultStore& store, RunProgress* progress,
-                  RunSummary* summary, std::chrono::steady_clock::time_point start) {
+// One check per shot (reference id) that the store lacks, on `options.jobs`
+// workers. Shots are dealt to shards by index, as benchmark batches are, so
+// a sharded run checks each shot once, not once per shard.
+Status CheckShots(const std::vector<Job>& all_jobs, const RunOptions& options, ResultStore& store,
+                  RunProgress* progress, RunSummary* summary, std::chrono::steady_clock::time_point start) {
   std::vector<Job> shots;
   std::set<std::string> seen;
-  for (const Job& job : jobs) {
+  int index = 0;
+  for (const Job& job : all_jobs) {
     if (!seen.insert(ReferenceId(job)).second) continue;
+    if (index++ % options.shard_count != options.shard_index) continue;
     auto has = store.HasShot(ReferenceId(job));
     if (!has) return has.failure();
     if (!*has) shots.push_back(job);
@@ -351,7 +354,7 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
   }
 
   if (options.check_shots) {
-    if (Status s = CheckShots(jobs, options, *store, &progress, &summary, start); !s) {
+    if (Status s = CheckShots(all_jobs, options, *store, &progress, &summary, start); !s) {
       summary.error = s.failure();
       return summary;
     }

@@ -126,6 +126,18 @@ TEST(RunCli, ShardsMergedEqualOneRun) {
     EXPECT_EQ(merged.at(id).at("tv_ratio"), metrics.at("tv_ratio")) << id;
     EXPECT_EQ(merged.at(id).at("flicker").at("flicker_index"), metrics.at("flicker").at("flicker_index")) << id;
   }
+  // Shot checks are dealt to shards like benchmark batches: each shot is
+  // checked by exactly one shard, and the merged store has them all.
+  auto shot_count = [&](const std::string& db) {
+    auto store = ResultStore::Open((ws.dir / db).string(), ResultStore::Mode::kReadOnly);
+    EXPECT_TRUE(store) << store.error();
+    auto shots = (*store)->Shots();
+    EXPECT_TRUE(shots) << shots.error();
+    return shots->size();
+  };
+  EXPECT_EQ(shot_count("s0.db") + shot_count("s1.db") + shot_count("s2.db"), shot_count("full.db"));
+  EXPECT_EQ(shot_count("all.db"), shot_count("full.db"));
+  EXPECT_EQ(shot_count("full.db"), 2u);
 }
 
 std::string ReadText(const fs::path& path) {

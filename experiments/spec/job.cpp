@@ -134,8 +134,9 @@ std::string CoreVersionOf(std::span<const std::pair<std::string_view, std::strin
     for (const auto& [file, text] : sources) {
       if (file != name) continue;
       std::size_t at = 0;
-      while ((at = text.find("#include \"", at)) != std::string_view::npos) {
-        at += 10;
+      constexpr std::string_view kInclude = "#include \"";
+      while ((at = text.find(kInclude, at)) != std::string_view::npos) {
+        at += kInclude.size();
         const std::size_t end = text.find('"', at);
         if (end == std::string_view::npos) break;
         const std::string_view included = text.substr(at, end - at);

@@ -59,6 +59,10 @@ struct Glsl<float> {
   static float RectSeed(glm::vec2 c, glm::vec2 a, glm::vec2 f) { return glsl_f32::ggxRectMeanSeed(c, a, f); }
   static float RectStable(glm::vec2 c, glm::vec2 a, glm::vec2 f) { return glsl_f32::ggxRectMeanStable(c, a, f); }
   static float RectJacobian(glm::vec2 c, glm::vec2 a, glm::vec2 f) { return glsl_f32::ggxRectMeanJacobian(c, a, f); }
+  using SG = glsl_f32::SG;
+  using ASG = glsl_f32::ASG;
+  static SG SgNdf(glm::vec3 n, float a) { return glsl_f32::distributionTermSG(n, a); }
+  static float OneMinusExpNegOver(float y) { return glsl_f32::oneMinusExpNegOver(y); }
 };
 template <>
 struct Glsl<double> {
@@ -73,6 +77,10 @@ struct Glsl<double> {
   static double RectJacobian(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) {
     return glsl_f64::ggxRectMeanJacobian(c, a, f);
   }
+  using SG = glsl_f64::SG;
+  using ASG = glsl_f64::ASG;
+  static SG SgNdf(glm::dvec3 n, double a) { return glsl_f64::distributionTermSG(n, a); }
+  static double OneMinusExpNegOver(double y) { return glsl_f64::oneMinusExpNegOver(y); }
 };
 
 }  // namespace
@@ -118,36 +126,21 @@ T GgxRectMeanJacobian(glm::vec<2, T> centre, glm::vec<2, T> alpha, glm::vec<2, T
 // --- Spherical Gaussians (sg.glsl) ---------------------------------------------
 
 namespace {
-// The GLSL namespace of each precision; the sg.glsl functions are found by
-// argument-dependent lookup on its SG / ASG types.
-template <class T>
-struct SgGlsl;
-template <>
-struct SgGlsl<float> {
-  using SG = glsl_f32::SG;
-  using ASG = glsl_f32::ASG;
-  static SG Ndf(glm::vec3 n, float a) { return glsl_f32::distributionTermSG(n, a); }
-  static float OneMinusExpNegOver(float y) { return glsl_f32::oneMinusExpNegOver(y); }
-};
-template <>
-struct SgGlsl<double> {
-  using SG = glsl_f64::SG;
-  using ASG = glsl_f64::ASG;
-  static SG Ndf(glm::dvec3 n, double a) { return glsl_f64::distributionTermSG(n, a); }
-  static double OneMinusExpNegOver(double y) { return glsl_f64::oneMinusExpNegOver(y); }
-};
+// sg.glsl's functions are found by argument-dependent lookup on the SG / ASG
+// types of Glsl<T>'s namespace; the two that take no such argument are in
+// Glsl<T> itself.
 
 template <class T>
-typename SgGlsl<T>::SG ToGlsl(const Sg<T>& g) {
-  typename SgGlsl<T>::SG r;
+typename Glsl<T>::SG ToGlsl(const Sg<T>& g) {
+  typename Glsl<T>::SG r;
   r.axis = g.axis;
   r.sharpness = g.sharpness;
   r.amplitude = g.amplitude;
   return r;
 }
 template <class T>
-typename SgGlsl<T>::ASG ToGlsl(const Asg<T>& g) {
-  typename SgGlsl<T>::ASG r;
+typename Glsl<T>::ASG ToGlsl(const Asg<T>& g) {
+  typename Glsl<T>::ASG r;
   r.basisX = g.basis_x;
   r.basisY = g.basis_y;
   r.basisZ = g.basis_z;
@@ -182,11 +175,11 @@ glm::vec<3, T> SgInnerProduct(const Sg<T>& a, const Sg<T>& b) {
 }
 template <class T>
 T OneMinusExpNegOver(T y) {
-  return SgGlsl<T>::OneMinusExpNegOver(y);
+  return Glsl<T>::OneMinusExpNegOver(y);
 }
 template <class T>
 Sg<T> DistributionTermSg(glm::vec<3, T> normal, T alpha) {
-  return FromGlslSg(SgGlsl<T>::Ndf(normal, alpha));
+  return FromGlslSg(Glsl<T>::SgNdf(normal, alpha));
 }
 template <class T>
 Sg<T> WarpDistributionSg(const Sg<T>& ndf, glm::vec<3, T> view) {

@@ -22,7 +22,7 @@ double MsSince(Clock::time_point t) { return std::chrono::duration<double, std::
 constexpr std::string_view kUserVariantFile = "user_variant.glsl";
 
 // The kernel and the files it includes besides the shading core.
-std::vector<shading::GlslFile> KernelFiles(bool user_variant, shading::GlslFile* main) {
+std::vector<shading::GlslFile> KernelFiles(bool user_variant, bool sg_light, shading::GlslFile* main) {
   std::vector<shading::GlslFile> extra;
   for (const auto& [name, body] : embedded::Sources()) {
     if (name == "render.comp")
@@ -30,11 +30,11 @@ std::vector<shading::GlslFile> KernelFiles(bool user_variant, shading::GlslFile*
     else
       extra.push_back({std::string(name), std::string(body)});
   }
-  if (user_variant) {
-    // After #version (line 1): keep the kernel's own line numbers after the define.
-    auto eol = main->text.find('\n');
-    main->text.insert(eol + 1, "#define SHIMMER_USER_VARIANT\n#line 2\n");
-  }
+  // After #version (line 1): keep the kernel's own line numbers after the defines.
+  std::string defines;
+  if (user_variant) defines += "#define SHIMMER_USER_VARIANT\n";
+  if (sg_light) defines += "#define SHIMMER_SG_LIGHT\n";
+  if (!defines.empty()) main->text.insert(main->text.find('\n') + 1, defines + "#line 2\n");
   return extra;
 }
 
@@ -116,14 +116,14 @@ DeviceCache& Devices() {
 }  // namespace
 
 Result<std::shared_ptr<const shading::Spirv>> KernelSpirv(const std::string& user_text, const std::string& user_file,
-                                                          double* compile_ms) {
+                                                          bool sg_light, double* compile_ms) {
   const bool user = !user_file.empty();
-  const std::string key = user ? "user:" + user_text : std::string();
+  const std::string key = std::string(sg_light ? "sg:" : "delta:") + (user ? "user:" + user_text : std::string());
   const auto t0 = Clock::now();
   std::lock_guard lock(Modules().mutex);
   if (auto it = Modules().modules.find(key); it != Modules().modules.end()) return it->second;
   shading::GlslFile main;
-  std::vector<shading::GlslFile> extra = KernelFiles(user, &main);
+  std::vector<shading::GlslFile> extra = KernelFiles(user, sg_light, &main);
   if (user) extra.push_back({std::string(kUserVariantFile), user_text});
   auto compiled = shading::CompileCompute(main, extra);
   if (!compiled) {

@@ -18,11 +18,12 @@
 namespace shimmer::render {
 
 // render.comp compiled once per process for the built-in variants (empty
-// `user_text`), or once per distinct user variant text. `user_file` names
-// the user's file in compile errors. `compile_ms` is set when this call
-// compiled (0 when cached).
+// `user_text`), or once per distinct user variant text, each with or
+// without the SG-light integral (`sg_light`: the scene has an SG light).
+// `user_file` names the user's file in compile errors. `compile_ms` is set
+// when this call compiled (0 when cached).
 Result<std::shared_ptr<const shading::Spirv>> KernelSpirv(const std::string& user_text, const std::string& user_file,
-                                                          double* compile_ms);
+                                                          bool sg_light, double* compile_ms);
 
 // A device shared by every renderer asking for the same options, created on
 // first use and never destroyed: tearing Vulkan down from static destructors

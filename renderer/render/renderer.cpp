@@ -221,7 +221,8 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
     if (!text) return text.failure();
     user_text = std::move(*text);
   }
-  auto spirv = KernelSpirv(user_text, settings.variant_file, &im.timings.compile_ms);
+  const bool sg_light = settings.scene.light.type == shading::LightType::kSg;
+  auto spirv = KernelSpirv(user_text, settings.variant_file, sg_light, &im.timings.compile_ms);
   if (!spirv) return spirv.failure();
 
   vk::ContextOptions options;
@@ -238,7 +239,8 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
                       "' has no subgroup quad operations in compute shaders; use analytic derivatives");
 
   const std::int32_t spec[] = {im.variant.id, static_cast<std::int32_t>(settings.derivatives), im.variant.spp_n,
-                               scene::SceneFeatures(settings.scene), static_cast<std::int32_t>(settings.material.ndf)};
+                               scene::SceneFeatures(settings.scene), static_cast<std::int32_t>(settings.material.ndf),
+                               im.variant.reference ? 1 : 0};
   using vk::BufferKind;
   const BufferKind kinds[] = {BufferKind::kUniform, BufferKind::kStorage, BufferKind::kStorage, BufferKind::kStorage};
   auto pipeline = AcquirePipeline(*device, *spirv, spec, kinds, sizeof(gpu::Push), &im.timings.pipeline_ms);

@@ -114,7 +114,7 @@ SequenceFile Describe(const RenderSettings& settings, const Renderer& renderer) 
   seq.status = SequenceStatus::kRunning;
   seq.scene = settings.scene.name;
   seq.material = scene::MaterialSpec(settings.material);
-  seq.light = settings.scene.light.type == shading::LightType::kDirectional ? "directional" : "sphere";
+  seq.light = std::string(shading::LightTypeName(settings.scene.light.type));
   seq.camera = {std::string(scene::CameraPathName(settings.camera)),
                 {rig.target.x, rig.target.y, rig.target.z},
                 rig.distance,

@@ -29,6 +29,10 @@ Result<ResolvedVariant> ResolveVariant(const RenderSettings& s) {
   }
   const shading::VariantInfo& info = *name->info;
   if (reference && info.id != 0) return R::Failure("a reference renders variant none, not " + s.variant);
+  if (shading::NeedsSgLight(info) && s.scene.light.type != shading::LightType::kSg)
+    return R::Failure("variant " + s.variant + " shades spherical-Gaussian lights only, and scene '" + s.scene.name +
+                      "' has a " + std::string(shading::LightTypeName(s.scene.light.type)) +
+                      " light (use an SG-lit scene such as sg-sphere-field)");
   if (info.ggx_only && s.material.ndf != shading::Ndf::kGgx)
     return R::Failure("variant " + s.variant + " filters GGX only; use a ggx material");
   auto params = shading::ResolveParams(info, s.param_overrides);

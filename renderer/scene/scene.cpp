@@ -36,6 +36,25 @@ shading::LightDesc Directional(glm::dvec3 towards, double irradiance) {
   return l;
 }
 
+// An SG light with the same irradiance at normal incidence as a directional
+// light of `irradiance`: int a e^(lambda (cos - 1)) cos dw = E gives
+// a = E lambda / (2 pi (1 - e^(-2 lambda))) up to the lobe's curvature
+// (1 / lambda relative).
+shading::LightDesc SgLight(glm::dvec3 axis, double sharpness, double irradiance) {
+  shading::LightDesc l;
+  l.type = shading::LightType::kSg;
+  l.vec = glm::normalize(axis);
+  l.radius = sharpness;
+  l.radiance = glm::dvec3(irradiance * sharpness / (2 * kPi * -std::expm1(-2 * sharpness)));
+  return l;
+}
+
+// Sharpness of the built-in SG scenes' lights: a lobe of about 4 degrees
+// (1 / sqrt(lambda) radians), between a sun and the broad SGs of baked
+// ambient light, sharp enough that the highlights of glossy materials still
+// alias.
+constexpr double kBuiltinSgSharpness = 200;
+
 Scene SphereScene() {
   Scene s;
   s.name = "sphere";
@@ -259,15 +278,48 @@ glm::vec4 PrimWord0(const Primitive& p) {
   return {float(static_cast<int>(p.type)), float(p.radius), float(p.bump_slope), float(p.bump_frequency)};
 }
 
+// The SG-lit scenes (seed 004): delta-lit ones with their light made an SG
+// of the same axis and irradiance, and a smooth grazing plane.
+Scene SgSphereFieldScene() {
+  Scene s = SphereFieldScene();
+  s.name = "sg-sphere-field";
+  s.light = SgLight(s.light.vec, kBuiltinSgSharpness, 3.0);
+  return s;
+}
+
+Scene SgBumpyPlaneScene() {
+  Scene s = BumpyPlaneScene();
+  s.name = "sg-bumpy-plane";
+  s.light = SgLight(s.light.vec, kBuiltinSgSharpness, 3.0);
+  return s;
+}
+
+// A smooth plane at grazing view with the light low in front of the camera:
+// the stretched highlight that the ASG warp models and the SG warp makes round.
+Scene SgPlaneScene() {
+  Scene s;
+  s.name = "sg-plane";
+  s.primitives.push_back({Primitive::Type::kPlane, {0, 0, 0}, {0, 0, 0}, 0.0});
+  s.light = SgLight({0.0, 0.2, -1.0}, kBuiltinSgSharpness, 3.0);
+  s.material.alpha = {0.1, 0.1};
+  s.rig = {{0, 0, 0}, 6.0, 10.0, 0.0, 40.0};
+  return s;
+}
+
 }  // namespace
 
-std::vector<std::string_view> BuiltinSceneNames() { return {"sphere", "sphere-field", "wires", "bumpy-plane"}; }
+std::vector<std::string_view> BuiltinSceneNames() {
+  return {"sphere", "sphere-field", "wires", "bumpy-plane", "sg-sphere-field", "sg-plane", "sg-bumpy-plane"};
+}
 
 Result<Scene> LoadScene(const std::string& name) {
   if (name == "sphere") return SphereScene();
   if (name == "sphere-field") return SphereFieldScene();
   if (name == "wires") return WiresScene();
   if (name == "bumpy-plane") return BumpyPlaneScene();
+  if (name == "sg-sphere-field") return SgSphereFieldScene();
+  if (name == "sg-plane") return SgPlaneScene();
+  if (name == "sg-bumpy-plane") return SgBumpyPlaneScene();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(name, ec)) {
     std::string list;
@@ -354,8 +406,25 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
           .Vec3("intensity", &s.light.radiance)
           .Number("radius", &s.light.radius, 1e-6, kMaxCoordinate);
       if (r.ok() && glm::any(glm::lessThan(s.light.radiance, glm::dvec3(0)))) r.Fail("'intensity' must be >= 0");
+    } else if (r.ok() && type == "sg") {
+      // A distant spherical Gaussian (seed 004): amplitude e^(sharpness (axis.l - 1)).
+      glm::dvec3 axis{0, 1, 0}, amplitude{1, 1, 1};
+      double sharpness = 0;
+      r.Keys({"type", "axis", "sharpness", "amplitude"})
+          .Require("axis")
+          .Require("sharpness")
+          .Require("amplitude")
+          .Vec3("axis", &axis)
+          .Number("sharpness", &sharpness, 0, kMaxSgSharpness)
+          .Vec3("amplitude", &amplitude);
+      if (r.ok() && glm::length(axis) < 1e-9) r.Fail("'axis' must not be zero");
+      if (r.ok() && glm::any(glm::lessThan(amplitude, glm::dvec3(0)))) r.Fail("'amplitude' must be >= 0");
+      s.light.type = shading::LightType::kSg;
+      if (r.ok()) s.light.vec = glm::normalize(axis);
+      s.light.radius = sharpness;
+      s.light.radiance = amplitude;
     } else if (r.ok()) {
-      r.Fail("'type' must be directional or sphere");
+      r.Fail("'type' must be directional, sphere or sg");
     }
     if (!r.ok()) return R::Failure(r.error());
   }

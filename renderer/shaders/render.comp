@@ -8,6 +8,8 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_quad : require
+#extension GL_EXT_control_flow_attributes : require
+#define SHIMMER_DONT_UNROLL [[dont_unroll]]
 #define real float
 #define SHIMMER_SCENE_WORDS
 
@@ -22,6 +24,14 @@ layout(constant_id = 3) const int SCENE_FEATURES = 15;  // SCENE_* bits of scene
 // then compiles one NDF's D and Smith Lambda instead of both (the reference
 // measured 5-8 % faster on lavapipe).
 layout(constant_id = 4) const int MATERIAL_NDF = 0;
+// 1 for the reference: an SG light's integral is then taken by Monte Carlo
+// per sample; otherwise by the shading core's fixed quadrature.
+layout(constant_id = 5) const int REFERENCE_MC = 0;
+// The renderer defines SHIMMER_SG_LIGHT for scenes lit by a spherical
+// Gaussian; every other kernel leaves the SG integral out (pixel.glsl).
+#ifndef SHIMMER_SG_LIGHT
+#define SHIMMER_DELTA_LIGHTS_ONLY
+#endif
 #define SHIMMER_SCENE_FEATURES
 
 struct CameraGpu {
@@ -67,6 +77,10 @@ FilteredNdf runVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p)
   return evalVariant(VARIANT_ID, ndf, alpha, f, p);
 }
 #endif
+
+FilteredNdf variantAt(int variant, int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {
+  return runVariant(ndf, alpha, f, p);
+}
 
 #include "channels.glsl"
 
@@ -160,14 +174,27 @@ struct SampleSums {
   vec3 diff;
 };
 
-SampleSums addSample(SampleSums a, SurfaceSample s, Ray ray, Light light, Material m, VariantParams vp) {
+const vec4 QUADRATURE = vec4(-1.0, 0.0, 0.0, 0.0);  // shadeSample: no random numbers
+
+// Random numbers of sample k for an SG light's Monte Carlo integral (the
+// reference): a 2D point per strategy, independent of the sub-pixel jitter.
+vec4 lightNumbers(uint seed, int k) {
+  if (REFERENCE_MC == 0) return QUADRATURE;
+  uint h = pcgHash(seed ^ pcgHash(uint(k) + 0x9e3779b9u));
+  uint h1 = pcgHash(h);
+  uint h2 = pcgHash(h1);
+  uint h3 = pcgHash(h2);
+  return vec4(float(h >> 8), float(h1 >> 8), float(h2 >> 8), float(h3 >> 8)) * (1.0 / 16777216.0);
+}
+
+SampleSums addSample(SampleSums a, SurfaceSample s, Ray ray, Light light, Material m, VariantParams vp, vec4 u) {
   ShadingFootprint f = zeroFootprint(s);
 #ifdef SHIMMER_USER_VARIANT
   f = analyticFootprint(s, ray, light);
 #else
   if (VARIANT_ID != VARIANT_NONE) f = analyticFootprint(s, ray, light);
 #endif
-  PixelShade sh = shadeSample(s, f, runVariant(m.ndf, m.alpha, f, vp), m);
+  PixelShade sh = shadeSample(s, f, runVariant(m.ndf, m.alpha, f, vp), m, light, VARIANT_ID, vp, u);
   a.spec += sh.specular;
   a.diff += sh.diffuse;
   return a;
@@ -223,7 +250,7 @@ void main() {
       f = quadFootprint(s, s0, s1, s0, s2);
     }
     FilteredNdf ndf = runVariant(m.ndf, m.alpha, f, vp);
-    PixelShade sh = shadeSample(s, f, ndf, m);
+    PixelShade sh = shadeSample(s, f, ndf, m, light, VARIANT_ID, vp, QUADRATURE);
     if (!inside) return;
     put3(CH_BEAUTY, idx, sh.specular + sh.diffuse);
     put3(CH_SPECULAR, idx, sh.specular);
@@ -268,16 +295,16 @@ void main() {
     Ray ray1 = sampleRay(c, px, seed, k + 1);
     SurfaceSample s0 = tracePixelRay(candidates, ray0, light);
     SurfaceSample s1 = tracePixelRay(candidates, ray1, light);
-    sums = addSample(sums, s0, ray0, light, m, vp);
-    sums = addSample(sums, s1, ray1, light, m, vp);
+    sums = addSample(sums, s0, ray0, light, m, vp, lightNumbers(seed, k));
+    sums = addSample(sums, s1, ray1, light, m, vp, lightNumbers(seed, k + 1));
   }
   for (; k < (fewCandidates ? samples : 0); k++) {  // odd N x N
     Ray ray = sampleRay(c, px, seed, k);
-    sums = addSample(sums, tracePixelRay(candidates, ray, light), ray, light, m, vp);
+    sums = addSample(sums, tracePixelRay(candidates, ray, light), ray, light, m, vp, lightNumbers(seed, k));
   }
   for (int k = 0; k < (fewCandidates ? 0 : samples); k++) {
     Ray ray = sampleRay(c, px, seed, k);
-    sums = addSample(sums, traceRay(ray, light), ray, light, m, vp);
+    sums = addSample(sums, traceRay(ray, light), ray, light, m, vp, lightNumbers(seed, k));
   }
   vec3 specB = sums.spec / float(samples);
   vec3 diffB = sums.diff / float(samples);
@@ -301,6 +328,7 @@ void main() {
     Ray ray = cameraRay(c, pixelCentre(px));
     SurfaceSample s = traceRay(ray, light);
     ShadingFootprint f = analyticFootprint(s, ray, light);
-    writeAovs(idx, px, s, shadeSample(s, f, runVariant(m.ndf, m.alpha, f, vp), m), prev);
+    writeAovs(idx, px, s, shadeSample(s, f, runVariant(m.ndf, m.alpha, f, vp), m, light, VARIANT_ID, vp, QUADRATURE),
+              prev);
   }
 }

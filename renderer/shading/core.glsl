@@ -5,5 +5,7 @@
 #include "ggx_rect.glsl"
 #include "variants.glsl"
 #include "brdf.glsl"
+#include "sg.glsl"
+#include "sg_light.glsl"
 #include "scene.glsl"
 #include "pixel.glsl"

@@ -18,6 +18,7 @@ using mat2 = glm::mat<2, 2, real, glm::defaultp>;
 using ivec2 = glm::ivec2;
 
 using glm::abs;
+using glm::acos;
 using glm::asinh;
 using glm::atan;
 using glm::ceil;
@@ -26,6 +27,7 @@ using glm::cos;
 using glm::cross;
 using glm::dot;
 using glm::exp;
+using glm::floor;
 using glm::inversesqrt;
 using glm::length;
 using glm::log;

@@ -5,6 +5,7 @@
 
 const int LIGHT_DIRECTIONAL = 0;
 const int LIGHT_SPHERE = 1;
+const int LIGHT_SG = 2;
 
 const int DERIV_ANALYTIC = 0;     // ray differentials (Igehy 1999) carried to hpp (seed 000)
 const int DERIV_QUAD_FINE = 1;    // 2x2 quad differences, per row / column (ddx_fine)
@@ -13,7 +14,9 @@ const int DERIV_QUAD_COARSE = 2;  // 2x2 quad differences of the quad's first ro
 // Directional: vec = unit direction towards the light, radiance = irradiance
 // at normal incidence. Sphere: vec = centre, radiance = intensity
 // (irradiance at unit distance); a small sphere is shaded in its point limit
-// (radius only keeps 1 / d^2 finite).
+// (radius only keeps 1 / d^2 finite). Spherical Gaussian (seed 004), distant:
+// vec = unit axis, radiance = amplitude (radiance along the axis), radius =
+// sharpness lambda of amplitude exp(lambda (axis.l - 1)).
 struct Light {
   int type;
   vec3 vec;
@@ -56,6 +59,14 @@ vec3 lightIrradiance(Light light, vec3 p) {
 real guardedZ(real z) {
   if (abs(z) < real(1e-8)) return z < real(0) ? real(-1e-8) : real(1e-8);
   return z;
+}
+
+SG lightSG(Light light) {
+  SG g;
+  g.axis = light.vec;
+  g.sharpness = light.radius;
+  g.amplitude = light.radiance;
+  return g;
 }
 
 SurfaceSample missedSample() {
@@ -203,7 +214,47 @@ struct PixelShade {
   vec2 footprint;  // slope-space footprint half-sides (|dx hpp| + |dy hpp|) / 2
 };
 
-PixelShade shadeSample(SurfaceSample s, ShadingFootprint f, FilteredNdf ndf, Material m) {
+// An SG light's specular: seed 004's closed forms for the SG variants, else
+// the exact BRDF with the variant's filtered D at every direction of the
+// light integral, by Monte Carlo with the sample's random numbers u (one 2D
+// point per strategy, the reference) when u.x >= 0, else by the fixed
+// quadrature (sg_light.glsl). Diffuse: the irradiance on the shading normal,
+// estimated from the light sample (reference) or converged.
+PixelShade shadeUnderSg(PixelShade o, SurfaceSample s, ShadingFootprint f, FilteredNdf ndf, Material m, Light light,
+                        int variant, VariantParams vp, vec4 u) {
+  SG g = lightSG(light);
+  if (u.x >= real(0))
+    o.diffuse = m.albedo * sgIrradianceEstimate(g, s.n, vec2(u.x, u.y)) / PI;
+  else
+    o.diffuse = m.albedo * sgIrradiance(g, s.n) / PI;
+  if (isSgVariant(variant)) {
+    real a = sqrt(ndf.alpha_eff.x * ndf.alpha_eff.y);  // one isotropic SG lobe: the geometric mean
+    if (variant == VARIANT_SG_WARP || variant == VARIANT_SG_WARP_K16)
+      o.specular = specularTermSGWarp(g, s.n, a, s.v, m.f0);
+    else
+      o.specular = specularTermASGWarp(g, s.n, a, s.v, m.f0);
+    return o;
+  }
+  SgShadingPoint p;
+  p.light = g;
+  p.t = s.tangent;
+  p.b = s.bitangent;
+  p.n = s.n;
+  p.ng = s.ng;
+  p.v = vec3(dot(s.v, s.tangent), dot(s.v, s.bitangent), dot(s.v, s.n));
+  p.variant = variant;
+  p.ndf = m.ndf;
+  p.alpha = m.alpha;
+  p.alphaEff = ndf.alpha_eff;
+  p.f0 = m.f0;
+  p.f = f;
+  p.vp = vp;
+  o.specular = sgSpecular(p, u);
+  return o;
+}
+
+PixelShade shadeSample(SurfaceSample s, ShadingFootprint f, FilteredNdf ndf, Material m, Light light, int variant,
+                       VariantParams vp, vec4 u) {
   PixelShade o;
   vec3 z = vec3(real(0), real(0), real(0));
   o.specular = z;
@@ -213,6 +264,12 @@ PixelShade shadeSample(SurfaceSample s, ShadingFootprint f, FilteredNdf ndf, Mat
   if (s.prim < 0) return o;
   o.alphaEff = ndf.alpha_eff;
   o.footprint = footprintHalfSides(f);
+#ifndef SHIMMER_DELTA_LIGHTS_ONLY
+  // A kernel for a delta-lit scene is compiled without this call (render.comp):
+  // lavapipe's pipeline creation otherwise takes seconds over the SG
+  // integral's inlined loops before it folds the branch away.
+  if (light.type == LIGHT_SG) return shadeUnderSg(o, s, f, ndf, m, light, variant, vp, u);
+#endif
   if (!(dot(s.ng, s.l) > real(0))) return o;  // light below the geometric horizon
   vec3 vl = vec3(dot(s.v, s.tangent), dot(s.v, s.bitangent), dot(s.v, s.n));
   vec3 ll = vec3(dot(s.l, s.tangent), dot(s.l, s.bitangent), dot(s.l, s.n));
@@ -266,6 +323,6 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
     r.f = quadFootprint(r.s, x0, x1, y0, y1);
   }
   r.ndf = evalVariant(variant, m.ndf, m.alpha, r.f, vp);
-  r.shade = shadeSample(r.s, r.f, r.ndf, m);
+  r.shade = shadeSample(r.s, r.f, r.ndf, m, light, variant, vp, vec4(real(-1), real(0), real(0), real(0)));
   return r;
 }

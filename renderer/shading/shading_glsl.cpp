@@ -24,9 +24,9 @@ vec4 sceneWord(int i) {
   return g_scene_words[std::size_t(i)];
 }
 #include "core.glsl"
-// Not in core.glsl until a variant calls it: the render kernel, and with it
-// every job id, stays as it is (ShadingCoreVersion hashes what core includes).
-#include "sg.glsl"
+FilteredNdf variantAt(int variant, int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {
+  return evalVariant(variant, ndf, alpha, f, p);
+}
 }  // namespace glsl_f32
 
 namespace glsl_f64 {
@@ -37,10 +37,14 @@ vec4 sceneWord(int i) {
   return vec4(g_scene_words[std::size_t(i)]);
 }
 #include "core.glsl"
-#include "sg.glsl"
+FilteredNdf variantAt(int variant, int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {
+  return evalVariant(variant, ndf, alpha, f, p);
+}
 }  // namespace glsl_f64
 
 static_assert(kPixelCandidates == glsl_f32::PIXEL_CANDIDATES);
+static_assert(kFirstSgVariant == glsl_f32::VARIANT_SG_WARP && kLastSgVariant == glsl_f32::VARIANT_ASG_WARP_K16);
+static_assert(int(LightType::kSg) == glsl_f32::LIGHT_SG && int(LightType::kSphere) == glsl_f32::LIGHT_SPHERE);
 static_assert(kSceneSpheres == glsl_f32::SCENE_SPHERES && kSceneCapsules == glsl_f32::SCENE_CAPSULES &&
               kScenePlanes == glsl_f32::SCENE_PLANES && kSceneBumps == glsl_f32::SCENE_BUMPS);
 
@@ -62,6 +66,8 @@ struct Glsl<float> {
   using SG = glsl_f32::SG;
   using ASG = glsl_f32::ASG;
   static SG SgNdf(glm::vec3 n, float a) { return glsl_f32::distributionTermSG(n, a); }
+  using SgShadingPoint = glsl_f32::SgShadingPoint;
+  static glm::vec3 Perpendicular(glm::vec3 n) { return glsl_f32::perpendicularTo(n); }
   static float OneMinusExpNegOver(float y) { return glsl_f32::oneMinusExpNegOver(y); }
 };
 template <>
@@ -80,6 +86,8 @@ struct Glsl<double> {
   using SG = glsl_f64::SG;
   using ASG = glsl_f64::ASG;
   static SG SgNdf(glm::dvec3 n, double a) { return glsl_f64::distributionTermSG(n, a); }
+  using SgShadingPoint = glsl_f64::SgShadingPoint;
+  static glm::dvec3 Perpendicular(glm::dvec3 n) { return glsl_f64::perpendicularTo(n); }
   static double OneMinusExpNegOver(double y) { return glsl_f64::oneMinusExpNegOver(y); }
 };
 
@@ -208,7 +216,71 @@ glm::vec<3, T> SpecularTermAsgWarp(const Sg<T>& light, glm::vec<3, T> normal, T 
   return specularTermASGWarp(ToGlsl(light), normal, alpha, view, f0);
 }
 
+namespace {
+// A flat surface point under `light` shaded by variant none (the tests' view
+// of sg_light.glsl).
+template <class T>
+auto FlatSgPoint(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3, T> view, glm::vec<3, T> f0) {
+  typename Glsl<T>::SgShadingPoint p;
+  p.light = ToGlsl(light);
+  p.n = normal;
+  p.t = Glsl<T>::Perpendicular(normal);
+  p.b = cross(normal, p.t);
+  p.ng = normal;
+  p.v = glm::vec<3, T>(dot(view, p.t), dot(view, p.b), dot(view, normal));
+  p.variant = 0;
+  p.ndf = 0;
+  p.alpha = glm::vec<2, T>(alpha);
+  p.alphaEff = p.alpha;
+  p.f0 = f0;
+  p.f.hpp = glm::vec<2, T>(0);
+  p.f.dhpp_dx = p.f.dhpp_dy = glm::vec<2, T>(0);
+  p.f.n = normal;
+  p.f.dn_dx = p.f.dn_dy = p.f.dng_dx = p.f.dng_dy = glm::vec<3, T>(0);
+  p.vp.fp_max = 1;
+  p.vp.fp_min_cap = T(0.1);
+  p.vp.sigma2 = 0;
+  p.vp.kappa = 0;
+  return p;
+}
+}  // namespace
+
+template <class T>
+glm::vec<3, T> SgLightSpecularEstimate(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3, T> view,
+                                       glm::vec<3, T> f0, glm::vec<2, T> u_light, glm::vec<2, T> u_brdf) {
+  return sgSpecular(FlatSgPoint(light, normal, alpha, view, f0), glm::vec<4, T>(u_light, glm::vec<2, T>(u_brdf.y, u_brdf.x)));
+}
+template <class T>
+glm::vec<3, T> SgLightSpecularQuadrature(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3, T> view,
+                                         glm::vec<3, T> f0) {
+  return sgSpecular(FlatSgPoint(light, normal, alpha, view, f0), glm::vec<4, T>(-1, 0, 0, 0));
+}
+template <class T>
+glm::vec<3, T> SgIrradiance(const Sg<T>& light, glm::vec<3, T> normal) {
+  return sgIrradiance(ToGlsl(light), normal);
+}
+template <class T>
+glm::vec<3, T> SgIrradianceEstimate(const Sg<T>& light, glm::vec<3, T> normal, glm::vec<2, T> u) {
+  return sgIrradianceEstimate(ToGlsl(light), normal, u);
+}
+template <class T>
+glm::vec<3, T> SgSampleDirection(const Sg<T>& light, glm::vec<2, T> u) {
+  return sgSampleDirection(ToGlsl(light), u);
+}
+template <class T>
+T SgDirectionPdf(const Sg<T>& light, glm::vec<3, T> dir) {
+  return sgDirectionPdf(ToGlsl(light), dir);
+}
+
 #define SHIMMER_INSTANTIATE(T)                                                                                    \
+  template glm::vec<3, T> SgLightSpecularEstimate<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>,             \
+                                                     glm::vec<3, T>, glm::vec<2, T>, glm::vec<2, T>);             \
+  template glm::vec<3, T> SgLightSpecularQuadrature<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>,           \
+                                                       glm::vec<3, T>);                                           \
+  template glm::vec<3, T> SgIrradiance<T>(const Sg<T>&, glm::vec<3, T>);                                          \
+  template glm::vec<3, T> SgIrradianceEstimate<T>(const Sg<T>&, glm::vec<3, T>, glm::vec<2, T>);                  \
+  template glm::vec<3, T> SgSampleDirection<T>(const Sg<T>&, glm::vec<2, T>);                                     \
+  template T SgDirectionPdf<T>(const Sg<T>&, glm::vec<3, T>);                                                     \
   template glm::vec<3, T> SgEvaluate<T>(const Sg<T>&, glm::vec<3, T>);                                            \
   template glm::vec<3, T> SgIntegral<T>(const Sg<T>&);                                                            \
   template glm::vec<3, T> SgInnerProduct<T>(const Sg<T>&, const Sg<T>&);                                          \
@@ -329,6 +401,10 @@ bool CatalogueMatchesGlsl() {
       {"filament", VARIANT_FILAMENT},
       {"unity-hdrp", VARIANT_UNITY_HDRP},
       {"godot", VARIANT_GODOT},
+      {"sg-warp", VARIANT_SG_WARP},
+      {"asg-warp", VARIANT_ASG_WARP},
+      {"sg-warp-k16", VARIANT_SG_WARP_K16},
+      {"asg-warp-k16", VARIANT_ASG_WARP_K16},
   };
   if (Variants().size() != std::size(expected) || std::size(expected) != size_t(VARIANT_COUNT)) return false;
   for (const auto& [name, id] : expected) {

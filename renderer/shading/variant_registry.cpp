@@ -120,6 +120,37 @@ std::vector<VariantInfo> BuildCatalogue() {
        {{"sigma2", 0.25, "roughness_limiter_amount"}, {"kappa", 0.18, "roughness_limiter_limit"}},
        true,
        false},
+      {"sg-warp",
+       14,
+       "SG lights only: the NDF as one SG, warped to the light domain (Wang et al. 2009), SG x SG inner product with "
+       "the light, G2 and F at the lobe centre",
+       "seed 004 (Pettineo, SG Series Part 4: SpecularTermSGWarp)",
+       {},
+       false,
+       true},
+      {"asg-warp",
+       15,
+       "SG lights only: the NDF SG warped to an anisotropic SG (Xu et al. 2013), ASG x SG convolution with the light, "
+       "G2 and F at the lobe centre",
+       "seed 004 (SpecularTermASGWarp)",
+       {},
+       false,
+       true},
+      {"sg-warp-k16",
+       16,
+       "sg-warp with the pixel footprint folded into the NDF's SG: alpha^2 += fp.x^2 + fp.y^2 (1 / lambda' = 1 / "
+       "lambda + 1 / lambda_fp), fp the rect footprint clamped to fp_max",
+       "ours: seed 004 filtered with seed 000's footprint",
+       {kFpMax1},
+       true,
+       true},
+      {"asg-warp-k16",
+       17,
+       "asg-warp with the same footprint folded into the NDF's SG before the warp",
+       "ours: seed 004 filtered with seed 000's footprint",
+       {kFpMax1},
+       true,
+       true},
   };
 }
 
@@ -143,5 +174,13 @@ std::optional<Ndf> ParseNdf(std::string_view name) {
 }
 
 std::string_view NdfName(Ndf ndf) { return ndf == Ndf::kGgx ? "ggx" : "beckmann"; }
+
+std::string_view LightTypeName(LightType type) {
+  if (type == LightType::kSphere) return "sphere";
+  if (type == LightType::kSg) return "sg";
+  return "directional";
+}
+
+bool NeedsSgLight(const VariantInfo& info) { return info.id >= kFirstSgVariant && info.id <= kLastSgVariant; }
 
 }  // namespace shimmer::shading

@@ -17,7 +17,14 @@ const int VARIANT_FILAMENT = 10;
 const int VARIANT_UNITY_HDRP = 11;
 const int VARIANT_GODOT = 12;
 const int VARIANT_K16_GGX_RECT_JACOBIAN = 13;
-const int VARIANT_COUNT = 14;
+// Seed 004's SG and ASG warps (sg.glsl), for SG lights only (sg_light.glsl).
+const int VARIANT_SG_WARP = 14;
+const int VARIANT_ASG_WARP = 15;
+const int VARIANT_SG_WARP_K16 = 16;
+const int VARIANT_ASG_WARP_K16 = 17;
+const int VARIANT_COUNT = 18;
+
+bool isSgVariant(int variant) { return variant >= VARIANT_SG_WARP && variant <= VARIANT_ASG_WARP_K16; }
 
 // What a pixel knows about its neighbourhood. Derivatives are per pixel along
 // screen x and y, from 2x2 quad differences or from ray differentials.
@@ -177,6 +184,18 @@ vec2 godotAlpha2(vec2 alpha, real spread, real sigma2, real kappa) {
   return a * a;
 }
 
+// The pixel footprint folded into the NDF's SG (sg-warp-k16, asg-warp-k16):
+// the SG exp(lambda (cos t - 1)) ~ exp(-t^2 / alpha^2) with lambda = 2 / alpha^2
+// has variance alpha^2 / 2 per axis; seed 000's rect footprint (half-sides
+// clamped to fp_max) is a Gaussian of variance fp^2 per axis. Convolving the
+// two, with the footprint made isotropic by averaging its axes, adds their
+// variances: alpha'^2 = alpha^2 + fp.x^2 + fp.y^2, i.e. 1 / lambda' = 1 / lambda
+// + 1 / lambda_fp with lambda_fp = 2 / (fp.x^2 + fp.y^2).
+real sgFootprintVariance(ShadingFootprint f, real fpMax) {
+  vec2 fp = min(footprintHalfSides(f), vec2(fpMax, fpMax));
+  return dot(fp, fp);
+}
+
 // Slope-space footprints beyond 1e4 per pixel (silhouettes) filter as much as
 // 1e4 does; capping them keeps squared covariances finite in float.
 const real FOOTPRINT_MAX = real(1e4);
@@ -232,5 +251,14 @@ FilteredNdf evalVariant(int variant, int ndf, vec2 alpha, ShadingFootprint f, Va
     return widenedNdf(ndf, hpp, tk19Alpha2(alpha, normalSpread(f.dng_dx, f.dng_dy), p.sigma2, p.kappa));
   if (variant == VARIANT_GODOT)
     return widenedNdf(ndf, hpp, godotAlpha2(alpha, normalSpread(f.dn_dx, f.dn_dy), p.sigma2, p.kappa));
+  if (isSgVariant(variant)) {
+    // The lobe seed 004 turns into one isotropic SG (pixel.glsl, shadeUnderSg).
+    vec2 a2 = alpha * alpha;
+    if (variant == VARIANT_SG_WARP_K16 || variant == VARIANT_ASG_WARP_K16) {
+      real v = sgFootprintVariance(f, p.fp_max);
+      a2 += vec2(v, v);
+    }
+    return widenedNdf(ndf, hpp, a2);
+  }
   return widenedNdf(ndf, hpp, alpha * alpha);  // VARIANT_NONE: point-sampled NDF
 }

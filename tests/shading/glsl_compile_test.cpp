@@ -49,7 +49,6 @@ const char* kSgKernel = R"(#version 460
 #extension GL_GOOGLE_include_directive : require
 #define real float
 #include "core.glsl"
-#include "sg.glsl"
 layout(local_size_x = 8) in;
 layout(std430, binding = 0) buffer Out { vec4 values[]; };
 void main() {

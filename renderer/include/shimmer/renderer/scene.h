@@ -49,6 +49,9 @@ struct Scene {
 // these lose every digit of a float in the kernel.
 inline constexpr std::size_t kMaxPrimitives = 1 << 20;
 inline constexpr double kMaxCoordinate = 1e6;
+// An SG light's sharpness: beyond it the lobe is narrower than float's
+// angular resolution near the axis (1 - cos below 1e-7).
+inline constexpr double kMaxSgSharpness = 1e6;
 
 std::vector<std::string_view> BuiltinSceneNames();
 // A built-in name, or else a path to a JSON scene file. Errors name the file

@@ -66,4 +66,29 @@ template <class T>
 glm::vec<3, T> SpecularTermAsgWarp(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3, T> view,
                                    glm::vec<3, T> f0);
 
+// --- The exact integral against an SG light (sg_light.glsl) ----------------
+// The renderer's GGX BRDF (D, height-correlated G2, Schlick F) on a surface
+// whose shading and geometric normal is `normal`, variant none.
+
+// One balance-heuristic estimate: a direction from the SG with u_light and a
+// reflected GGX visible normal with u_brdf, both in [0, 1)^2 (the reference's
+// per-sample estimator).
+template <class T>
+glm::vec<3, T> SgLightSpecularEstimate(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3, T> view,
+                                       glm::vec<3, T> f0, glm::vec<2, T> u_light, glm::vec<2, T> u_brdf);
+// The fixed quadrature 1-spp variants shade with.
+template <class T>
+glm::vec<3, T> SgLightSpecularQuadrature(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3, T> view,
+                                         glm::vec<3, T> f0);
+// int L(l) (n.l)+ dl, converged, and its one-sample estimate from an SG direction (the reference's).
+template <class T>
+glm::vec<3, T> SgIrradiance(const Sg<T>& light, glm::vec<3, T> normal);
+template <class T>
+glm::vec<3, T> SgIrradianceEstimate(const Sg<T>& light, glm::vec<3, T> normal, glm::vec<2, T> u);
+// The SG's own direction sampling and its density in solid angle.
+template <class T>
+glm::vec<3, T> SgSampleDirection(const Sg<T>& light, glm::vec<2, T> u);
+template <class T>
+T SgDirectionPdf(const Sg<T>& light, glm::vec<3, T> dir);
+
 }  // namespace shimmer::shading

@@ -79,13 +79,17 @@ struct CameraDesc {
   int height = 64;
 };
 
-enum class LightType { kDirectional = 0, kSphere = 1 };
+// pixel.glsl's LIGHT_*. kSg: a distant spherical-Gaussian light (seed 004)
+// amplitude * exp(sharpness * (axis . l - 1)).
+enum class LightType { kDirectional = 0, kSphere = 1, kSg = 2 };
 struct LightDesc {
   LightType type = LightType::kDirectional;
-  glm::dvec3 vec{0, 1, 0};       // unit direction towards the light, or the sphere's centre
-  glm::dvec3 radiance{1, 1, 1};  // irradiance at normal incidence, or intensity
-  double radius = 0;
+  glm::dvec3 vec{0, 1, 0};       // unit direction towards the light, the sphere's centre, or the SG's axis
+  glm::dvec3 radiance{1, 1, 1};  // irradiance at normal incidence, intensity, or the SG's amplitude (radiance)
+  double radius = 0;             // sphere: radius; SG: sharpness lambda
 };
+// "directional", "sphere", "sg".
+std::string_view LightTypeName(LightType type);
 
 struct MaterialDesc {
   Ndf ndf = Ndf::kGgx;
@@ -157,6 +161,10 @@ struct VariantInfo {
 
 std::span<const VariantInfo> Variants();
 const VariantInfo* FindVariant(std::string_view name);
+// Seed 004's SG and ASG warps (VARIANT_SG_WARP .. VARIANT_ASG_WARP_K16)
+// shade SG lights only; every other variant shades any light.
+inline constexpr int kFirstSgVariant = 14, kLastSgVariant = 17;
+bool NeedsSgLight(const VariantInfo& info);
 
 // The four variant parameters, named once: what a variant may read, and the
 // values it accepts.

@@ -346,6 +346,10 @@ Result<nlohmann::json> BlenderShotData(const BlenderShot& shot) {
   }
   const shading::CameraDesc c =
       scene::CameraAt(shot.camera_path, shot.scene.rig, shot.frame, shot.fps, shot.width, shot.height);
+  if (shot.scene.light.type == shading::LightType::kSg)
+    return R::Failure("scene " + shot.scene.name +
+                      " has a spherical-Gaussian light, which Cycles has no lamp for (an SG light is checked against "
+                      "shimmer's Monte Carlo reference instead)");
   nlohmann::json light;
   if (shot.scene.light.type == shading::LightType::kDirectional)
     light = {{"type", "sun"}, {"direction", Vec(shot.scene.light.vec)}, {"irradiance", Vec(shot.scene.light.radiance)}};

@@ -59,8 +59,10 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
         "defaults on held-out shots. Frames: "
      << spec.width << "×" << spec.height << ", " << spec.frames << " frames, reference " << spec.reference.spp << "×"
      << spec.reference.spp << " spp per replicate";
+  // The fits' materials are the top level's; those only a group has are not fitted.
   for (const auto& [material, spp] : spec.reference_spp_by_material)
-    md << ", " << spp << "×" << spp << " for " << material;
+    if (std::find(spec.materials.begin(), spec.materials.end(), material) != spec.materials.end())
+      md << ", " << spp << "×" << spp << " for " << material;
   md << " (" << spec.reference.replicates << " replicates).\n\n";
 
   std::vector<std::string> scripts;

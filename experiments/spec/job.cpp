@@ -98,15 +98,25 @@ bool ReadsDerivatives(const std::string& variant) {
 
 std::vector<Job> ExpandJobs(const Spec& spec) {
   std::vector<Job> jobs;
-  for (const std::string& scene : spec.scenes)
-    for (const std::string& material : spec.materials)
-      for (const std::string& camera : spec.cameras)
-        for (const VariantSweep& variant : spec.variants)
-          for (const auto& params : ParameterGrid(variant.params))
-            for (const std::string& derivatives : spec.derivatives) {
-              if (!ReadsDerivatives(variant.name) && derivatives != spec.derivatives.front()) continue;
-              jobs.push_back(SpecJob(spec, scene, material, camera, variant.name, params, derivatives));
-            }
+  // A job two groups share is run once, where it first appears. A variant
+  // that reads no derivatives is the same job under every source: its key
+  // leaves the source out, so that a group with other sources adds no second
+  // `none` of a shot.
+  std::set<std::string> seen;
+  for (const ShotGroup& group : AllGroups(spec))
+    for (const std::string& scene : group.scenes)
+      for (const std::string& material : group.materials)
+        for (const std::string& camera : group.cameras)
+          for (const VariantSweep& variant : group.variants)
+            for (const auto& params : ParameterGrid(variant.params))
+              for (const std::string& derivatives : group.derivatives) {
+                const bool reads = ReadsDerivatives(variant.name);
+                if (!reads && derivatives != group.derivatives.front()) continue;
+                Job job = SpecJob(spec, scene, material, camera, variant.name, params, derivatives);
+                Job key = job;
+                if (!reads) key.derivatives.clear();
+                if (seen.insert(JobId(key)).second) jobs.push_back(std::move(job));
+              }
   return jobs;
 }
 

@@ -1,6 +1,7 @@
 #include "shimmer/experiments/spec.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -27,14 +28,76 @@ using nlohmann::json;
 struct SpecError {
   std::string key;
   std::string problem;
+  // Within groups[group]: the key is looked for from that group on, and the
+  // message shows `label` ("groups[0].variants: k16-nope") instead of it.
+  int group = -1;
+  std::string label = {};
 };
 
-// The 1-based line of the first `"key"` in the text, or 0 when absent.
-int LineOfKey(std::string_view text, const std::string& key) {
+// The 1-based line of offset `pos` in the text.
+int LineAt(std::string_view text, std::size_t pos) {
+  return 1 + int(std::count(text.begin(), text.begin() + std::ptrdiff_t(pos), '\n'));
+}
+
+// The 1-based line of the first `"key"` in the text at or after `from`, or 0 when absent.
+int LineOfKey(std::string_view text, const std::string& key, std::size_t from = 0) {
   const std::string needle = "\"" + key + "\"";
-  const auto pos = text.find(needle);
+  const auto pos = text.find(needle, from);
   if (pos == std::string_view::npos) return 0;
-  return 1 + int(std::count(text.begin(), text.begin() + pos, '\n'));
+  return LineAt(text, pos);
+}
+
+// Where element `index` of the array after the first "groups" key starts,
+// or npos. The text is valid JSON (it parsed); only strings need care.
+std::size_t GroupOffset(std::string_view text, int index) {
+  std::size_t pos = text.find("\"groups\"");
+  if (pos == std::string_view::npos) return pos;
+  pos = text.find_first_not_of(" \t\r\n:", pos + 8);
+  if (pos == std::string_view::npos || text[pos] != '[') return std::string_view::npos;
+  int depth = 0, element = 0;
+  bool in_string = false;
+  for (std::size_t i = pos; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\')
+        ++i;
+      else if (c == '"')
+        in_string = false;
+      continue;
+    }
+    if (depth == 1 && element == index && c != ',' && c != ']' && !std::isspace(static_cast<unsigned char>(c)))
+      return i;
+    if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      ++depth;
+    } else if (c == ']' || c == '}') {
+      if (--depth == 0) break;
+    } else if (c == ',' && depth == 1) {
+      ++element;
+    }
+  }
+  return std::string_view::npos;
+}
+
+// Runs `parse` for `field` of groups[index] (the group itself when `field` is
+// empty), naming the group in what it throws: a problem with `key` reads
+// "groups[index].field: key: problem", or "groups[index].field: problem" when
+// the key is the field.
+template <class Parse>
+auto InGroup(int index, const std::string& field, Parse&& parse) {
+  try {
+    return parse();
+  } catch (SpecError& e) {
+    if (!e.label.empty()) throw;  // named already, by a nested call
+    const std::string at = "groups[" + std::to_string(index) + "]";
+    if (field.empty())
+      e.label = at + (e.key.empty() ? "" : "." + e.key);
+    else
+      e.label = at + "." + field + (e.key.empty() || e.key == field ? "" : ": " + e.key);
+    e.group = index;
+    throw;
+  }
 }
 
 void RejectUnknownKeys(const json& object, const std::set<std::string>& known, const std::string& where) {
@@ -98,6 +161,37 @@ void CheckCamera(const std::string& c) {
   }
 }
 
+std::vector<std::string> Scenes(const json& j) {
+  std::vector<std::string> scenes = StringList(j, "scenes");
+  for (const std::string& scene : scenes) {
+    const auto loaded = scene::LoadScene(scene);
+    if (!loaded) throw SpecError{scene, loaded.error()};
+  }
+  return scenes;
+}
+
+std::vector<std::string> Materials(const json& j) {
+  std::vector<std::string> materials = StringList(j, "materials");
+  for (const std::string& m : materials) {
+    const auto parsed = scene::ParseMaterial(m, {});
+    if (!parsed) throw SpecError{m, parsed.error()};
+  }
+  return materials;
+}
+
+std::vector<std::string> Cameras(const json& j) {
+  std::vector<std::string> cameras = StringList(j, "cameras");
+  for (const std::string& c : cameras) CheckCamera(c);
+  return cameras;
+}
+
+// The derivative sources by their canonical names.
+std::vector<std::string> DerivativeSources(const json& j) {
+  std::vector<std::string> sources = StringList(j, "derivatives");
+  for (std::string& d : sources) d = std::string(shading::DerivativeSourceName(Derivatives(d, "derivatives")));
+  return sources;
+}
+
 // A list of numbers, or {"from", "to", "steps", "scale": "linear|log"}.
 std::vector<double> ParameterValues(const json& j, const std::string& key) {
   if (j.is_number()) return {Number(j, key)};
@@ -155,6 +249,34 @@ VariantSweep ParseVariant(const json& j) {
     }
   }
   return v;
+}
+
+std::vector<VariantSweep> Variants(const json& j) {
+  if (!j.is_array() || j.empty()) throw SpecError{"variants", "must be a non-empty array"};
+  std::vector<VariantSweep> variants;
+  for (const json& v : j) variants.push_back(ParseVariant(v));
+  return variants;
+}
+
+constexpr const char* kGroupKeys = "cameras, derivatives, materials, scenes, variants";
+
+// groups[index]: the keys it has replace the top level's.
+ShotGroup ParseGroup(const json& g, int index, const ShotGroup& top) {
+  return InGroup(index, "", [&] {
+    if (!g.is_object()) throw SpecError{"", std::string("must be an object with any of: ") + kGroupKeys};
+    RejectUnknownKeys(g, {"scenes", "materials", "cameras", "variants", "derivatives"}, "");
+    if (g.empty())
+      throw SpecError{
+          "", std::string("is empty: give at least one of ") + kGroupKeys + " (the others are the top level's)"};
+    ShotGroup out = top;
+    if (g.contains("scenes")) out.scenes = InGroup(index, "scenes", [&] { return Scenes(g["scenes"]); });
+    if (g.contains("materials")) out.materials = InGroup(index, "materials", [&] { return Materials(g["materials"]); });
+    if (g.contains("cameras")) out.cameras = InGroup(index, "cameras", [&] { return Cameras(g["cameras"]); });
+    if (g.contains("variants")) out.variants = InGroup(index, "variants", [&] { return Variants(g["variants"]); });
+    if (g.contains("derivatives"))
+      out.derivatives = InGroup(index, "derivatives", [&] { return DerivativeSources(g["derivatives"]); });
+    return out;
+  });
 }
 
 ShotSet ParseShots(const json& j, const std::string& key) {
@@ -243,8 +365,8 @@ FitConfig ParseFit(const json& f, const Spec& spec) {
 Spec ParseSpecObject(const json& j) {
   if (!j.is_object()) throw SpecError{"", "a spec is a JSON object"};
   RejectUnknownKeys(j,
-                    {"name", "scenes", "materials", "cameras", "variants", "derivatives", "size", "frames", "fps",
-                     "reference", "metrics", "benchmark", "fit"},
+                    {"name", "scenes", "materials", "cameras", "variants", "derivatives", "groups", "size", "frames",
+                     "fps", "reference", "metrics", "benchmark", "fit"},
                     "");
   Spec s;
   for (const char* required : {"name", "scenes", "materials", "cameras", "variants"})
@@ -252,23 +374,17 @@ Spec ParseSpecObject(const json& j) {
   if (!j["name"].is_string()) throw SpecError{"name", "must be a string"};
   s.name = j["name"];
   CheckName(s.name);
-  s.scenes = StringList(j["scenes"], "scenes");
-  for (const std::string& scene : s.scenes) {
-    const auto loaded = scene::LoadScene(scene);
-    if (!loaded) throw SpecError{scene, loaded.error()};
-  }
-  s.materials = StringList(j["materials"], "materials");
-  for (const std::string& m : s.materials) {
-    const auto parsed = scene::ParseMaterial(m, {});
-    if (!parsed) throw SpecError{m, parsed.error()};
-  }
-  s.cameras = StringList(j["cameras"], "cameras");
-  for (const std::string& c : s.cameras) CheckCamera(c);
-  if (!j["variants"].is_array() || j["variants"].empty()) throw SpecError{"variants", "must be a non-empty array"};
-  for (const json& v : j["variants"]) s.variants.push_back(ParseVariant(v));
-  if (j.contains("derivatives")) {
-    s.derivatives = StringList(j["derivatives"], "derivatives");
-    for (std::string& d : s.derivatives) d = std::string(shading::DerivativeSourceName(Derivatives(d, "derivatives")));
+  s.scenes = Scenes(j["scenes"]);
+  s.materials = Materials(j["materials"]);
+  s.cameras = Cameras(j["cameras"]);
+  s.variants = Variants(j["variants"]);
+  if (j.contains("derivatives")) s.derivatives = DerivativeSources(j["derivatives"]);
+  if (j.contains("groups")) {
+    const json& g = j["groups"];
+    if (!g.is_array() || g.empty())
+      throw SpecError{"groups", std::string("must be a non-empty list of objects with any of: ") + kGroupKeys};
+    const ShotGroup top = AllGroups(s).front();
+    for (std::size_t i = 0; i < g.size(); ++i) s.groups.push_back(ParseGroup(g[i], int(i), top));
   }
   if (j.contains("size")) {
     const json& size = j["size"];
@@ -291,9 +407,12 @@ Spec ParseSpecObject(const json& j) {
     if (r.contains("spp_by_material")) {
       const json& m = r["spp_by_material"];
       if (!m.is_object()) throw SpecError{"spp_by_material", "must be {\"MATERIAL\": N, ...}"};
+      std::set<std::string> materials;  // of the top level and every group
+      for (const ShotGroup& group : AllGroups(s)) materials.insert(group.materials.begin(), group.materials.end());
       for (const auto& [material, spp] : m.items()) {
-        if (std::find(s.materials.begin(), s.materials.end(), material) == s.materials.end())
-          throw SpecError{"spp_by_material", material + ": not one of the spec's materials"};
+        if (!materials.count(material))
+          throw SpecError{"spp_by_material", material + ": not one of the spec's materials" +
+                                                 std::string(s.groups.empty() ? "" : " (nor of its groups)")};
         s.reference_spp_by_material[material] = PositiveInt(spp, "spp_by_material", render::kMaxReferenceSpp);
       }
     }
@@ -360,18 +479,25 @@ Spec ParseSpecObject(const json& j) {
       throw SpecError{"fit", "must be an object or a non-empty list of objects"};
     }
   }
-  // Counted before anything is expanded: a cross product can be astronomically large.
-  double combos = 0;
-  for (const VariantSweep& v : s.variants) {
-    double n = 1;
-    for (const auto& [name, values] : v.params) n *= double(values.size());
-    combos += n;
+  // Counted before anything is expanded, every group's cross product
+  // together (before jobs two groups share are merged): a cross product can
+  // be astronomically large.
+  double jobs = 0;
+  for (const ShotGroup& g : AllGroups(s)) {
+    double combos = 0;
+    for (const VariantSweep& v : g.variants) {
+      double n = 1;
+      for (const auto& [name, values] : v.params) n *= double(values.size());
+      combos += n;
+    }
+    jobs += double(g.scenes.size()) * double(g.materials.size()) * double(g.cameras.size()) * combos *
+            double(g.derivatives.size());
   }
-  const double jobs = double(s.scenes.size()) * double(s.materials.size()) * double(s.cameras.size()) * combos *
-                      double(s.derivatives.size());
   if (jobs > double(kMaxJobs))
-    throw SpecError{"variants", "the spec expands to " + NumberText(jobs) + " jobs; at most " +
-                                    std::to_string(kMaxJobs) + " are supported (split it into several specs)"};
+    throw SpecError{s.groups.empty() ? "variants" : "groups",
+                    "the spec expands to " + NumberText(jobs) + " jobs" +
+                        (s.groups.empty() ? "" : " (top level and groups together)") + "; at most " +
+                        std::to_string(kMaxJobs) + " are supported (split it into several specs)"};
   return s;
 }
 
@@ -383,15 +509,27 @@ Result<Spec> ParseSpec(std::string_view text, const std::string& source) {
   try {
     return ParseSpecObject(*j);
   } catch (const SpecError& e) {
-    const int line = e.key.empty() ? 0 : LineOfKey(text, e.key);
+    // In a group, the key is looked for from the group on, and the group's
+    // own line stands in when it is not found there.
+    const std::size_t group_at = e.group >= 0 ? GroupOffset(text, e.group) : std::string_view::npos;
+    const std::size_t from = group_at == std::string_view::npos ? 0 : group_at;
+    int line = e.key.empty() ? 0 : LineOfKey(text, e.key, from);
+    if (!line && group_at != std::string_view::npos) line = LineAt(text, group_at);
+    const std::string& shown = e.label.empty() ? e.key : e.label;
     return Result<Spec>::Failure(source + (line ? ":" + std::to_string(line) : "") + ": " +
-                                 (e.key.empty() ? "" : e.key + ": ") + e.problem);
+                                 (shown.empty() ? "" : shown + ": ") + e.problem);
   } catch (const json::exception& e) {
     // A type the checks above missed; nlohmann's id prefix says nothing to a user.
     std::string what = e.what();
     if (auto close = what.find("] "); close != std::string::npos) what = what.substr(close + 2);
     return Result<Spec>::Failure(source + ": " + what);
   }
+}
+
+std::vector<ShotGroup> AllGroups(const Spec& spec) {
+  std::vector<ShotGroup> all{{spec.scenes, spec.materials, spec.cameras, spec.variants, spec.derivatives}};
+  all.insert(all.end(), spec.groups.begin(), spec.groups.end());
+  return all;
 }
 
 Result<Spec> LoadSpec(const std::string& path) {

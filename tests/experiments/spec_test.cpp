@@ -367,3 +367,170 @@ TEST(Spec, BenchmarkBatchesHoldEveryVariantOfAScenesDerivativeSourceWithNoneFirs
 
 }  // namespace
 }  // namespace shimmer::experiments
+
+namespace shimmer::experiments {
+namespace {
+
+// Lines: 1 "{", 2 name, 3 scenes, 4 materials, 5 cameras, 6 variants, 7 "groups" (and what `groups` spans).
+std::string GroupSpec(const std::string& groups, const std::string& tail = "") {
+  return "{\n  \"name\": \"g\",\n  \"scenes\": [\"sphere\"],\n  \"materials\": [\"ggx:0.1\"],\n"
+         "  \"cameras\": [\"orbit\"],\n  \"variants\": [\"none\", \"tk19\"],\n  \"groups\": " +
+         groups + tail + "\n}";
+}
+
+std::string Describe(const Job& j) {
+  std::string params;
+  for (const auto& [name, value] : j.params) params += " " + name + "=" + std::to_string(value);
+  return j.scene + " " + j.material + " " + j.camera + " " + j.variant + params + " " + j.derivatives;
+}
+
+std::vector<std::string> Described(const std::vector<Job>& jobs) {
+  std::vector<std::string> out;
+  for (const Job& j : jobs) out.push_back(Describe(j));
+  return out;
+}
+
+TEST(Spec, GroupsAddTheirCrossProductsAfterTheTopLevelOnes) {
+  auto r = ParseSpec(
+      GroupSpec(R"([{"scenes": ["wires"], "variants": ["none", {"name": "tk19", "params": {"kappa": [0.1, 0.3]}}]}])"),
+      "g.json");
+  ASSERT_TRUE(r) << r.error();
+  ASSERT_EQ(r->groups.size(), 1u);
+  // The top-level fields stay the top level's.
+  EXPECT_EQ(r->scenes, std::vector<std::string>{"sphere"});
+  EXPECT_EQ(r->variants.size(), 2u);
+  const std::vector<ShotGroup> all = AllGroups(*r);
+  ASSERT_EQ(all.size(), 2u);
+  EXPECT_EQ(all[0].scenes, std::vector<std::string>{"sphere"});
+  EXPECT_EQ(all[1].scenes, std::vector<std::string>{"wires"});
+  EXPECT_EQ(all[1].variants[1].params.at("kappa"), (std::vector<double>{0.1, 0.3}));
+  EXPECT_EQ(Described(ExpandJobs(*r)), (std::vector<std::string>{
+                                           "sphere ggx:0.1 orbit none quad",
+                                           "sphere ggx:0.1 orbit tk19 quad",
+                                           "wires ggx:0.1 orbit none quad",
+                                           "wires ggx:0.1 orbit tk19 kappa=0.100000 quad",
+                                           "wires ggx:0.1 orbit tk19 kappa=0.300000 quad",
+                                       }));
+}
+
+TEST(Spec, AGroupInheritsTheKeysItOmits) {
+  auto r = ParseSpec(GroupSpec(R"([{"materials": ["beckmann:0.1"]}])", R"(,
+  "derivatives": ["quad", "analytic"])"),
+                     "g.json");
+  ASSERT_TRUE(r) << r.error();
+  ASSERT_EQ(r->groups.size(), 1u);
+  const ShotGroup& g = r->groups[0];
+  EXPECT_EQ(g.materials, std::vector<std::string>{"beckmann:0.1"});
+  EXPECT_EQ(g.scenes, r->scenes);
+  EXPECT_EQ(g.cameras, r->cameras);
+  EXPECT_EQ(g.derivatives, (std::vector<std::string>{"quad", "analytic"}));
+  ASSERT_EQ(g.variants.size(), 2u);
+  EXPECT_EQ(g.variants[0].name, "none");
+  EXPECT_EQ(g.variants[1].name, "tk19");
+  // Each of the two materials: none once, tk19 under both sources.
+  EXPECT_EQ(Described(ExpandJobs(*r)), (std::vector<std::string>{
+                                           "sphere ggx:0.1 orbit none quad",
+                                           "sphere ggx:0.1 orbit tk19 quad",
+                                           "sphere ggx:0.1 orbit tk19 analytic",
+                                           "sphere beckmann:0.1 orbit none quad",
+                                           "sphere beckmann:0.1 orbit tk19 quad",
+                                           "sphere beckmann:0.1 orbit tk19 analytic",
+                                       }));
+}
+
+TEST(Spec, AJobOfTwoGroupsIsRunOnce) {
+  // The first group repeats the top level's variants and adds one; the second
+  // repeats the first; the third spells out tk19's default kappa (the same
+  // job as "tk19"); the fourth adds a derivative source, which `none` never
+  // reads.
+  auto r = ParseSpec(GroupSpec(R"([
+    {"variants": ["none", "tk19", "k16-beckmann-rect"]},
+    {"variants": ["none", "tk19", "k16-beckmann-rect"]},
+    {"variants": [{"name": "tk19", "params": {"kappa": [0.18]}}]},
+    {"derivatives": ["analytic"]}
+  ])"),
+                     "g.json");
+  ASSERT_TRUE(r) << r.error();
+  ASSERT_EQ(r->groups.size(), 4u);
+  const std::vector<Job> jobs = ExpandJobs(*r);
+  EXPECT_EQ(Described(jobs), (std::vector<std::string>{
+                                 "sphere ggx:0.1 orbit none quad",
+                                 "sphere ggx:0.1 orbit tk19 quad",
+                                 "sphere ggx:0.1 orbit k16-beckmann-rect quad",
+                                 "sphere ggx:0.1 orbit tk19 analytic",
+                             }));
+  std::set<std::string> ids;
+  for (const Job& j : jobs) ids.insert(JobId(j));
+  EXPECT_EQ(ids.size(), jobs.size());
+}
+
+TEST(Spec, MalformedGroupsNameTheGroupAndItsKey) {
+  for (const auto& [groups, expected] : std::vector<std::pair<std::string, std::string>>{
+           {R"([{"scenes": ["wires"]}, {"scenez": ["wires"]}])", "groups[1].scenez: unknown key (expected one of: "},
+           {R"([{}])", "groups[0]: is empty: give at least one of"},
+           {R"({"scenes": ["wires"]})", "groups: must be a non-empty list of objects"},
+           {R"([])", "groups: must be a non-empty list of objects"},
+           {R"(["wires"])", "groups[0]: must be an object with any of: cameras, derivatives"},
+           {R"([{"scenes": ["wires"]}, {"variants": ["k16-nope"]}])", "groups[1].variants: k16-nope: unknown variant"},
+           {R"([{"variants": [{"name": "tk19", "params": {"fp_max": [1]}}]}])",
+            "groups[0].variants: fp_max: variant tk19 has no parameter"},
+           {R"([{"variants": []}])", "groups[0].variants: must be a non-empty array"},
+           {R"([{"scenes": ["nowhere.json"]}])", "groups[0].scenes: nowhere.json: "},
+           {R"([{"scenes": []}])", "groups[0].scenes: is empty"},
+           {R"([{"materials": ["ggx:-1"]}])", "groups[0].materials: ggx:-1: "},
+           {R"([{"cameras": ["spin"]}])", "groups[0].cameras: spin: unknown camera path"},
+           {R"([{"derivatives": ["sobel"]}])", "groups[0].derivatives: must be quad"},
+       }) {
+    auto bad = ParseSpec(GroupSpec(groups), "bad.json");
+    ASSERT_FALSE(bad) << groups;
+    EXPECT_NE(bad.error().find(expected), std::string::npos) << bad.error();
+  }
+  // The line is the group's, not that of the top level's key of the same name.
+  std::string e = ErrorOf(GroupSpec("[\n    {\"scenes\": [\"wires\"]},\n    {\"variants\": \"none\"}\n  ]"));
+  EXPECT_NE(e.find("bad.json:9: groups[1].variants: must be a non-empty array"), std::string::npos) << e;
+  e = ErrorOf(GroupSpec("[\n    {\"scenes\": [\"wires\"]},\n    {}\n  ]"));
+  EXPECT_NE(e.find("bad.json:9: groups[1]: is empty"), std::string::npos) << e;
+  e = ErrorOf(GroupSpec("[\n    {\"scenes\": [\"wires\"]},\n    {\"scenes\": [\"wires\"], \"scenez\": 1}\n  ]"));
+  EXPECT_NE(e.find("bad.json:9: groups[1].scenez: unknown key"), std::string::npos) << e;
+}
+
+TEST(Spec, SppByMaterialMayNameAMaterialOnlyAGroupHas) {
+  auto r = ParseSpec(GroupSpec(R"([{"materials": ["ggx:0.01"]}])", R"(,
+  "reference": {"spp": 6, "spp_by_material": {"ggx:0.01": 12}})"),
+                     "g.json");
+  ASSERT_TRUE(r) << r.error();
+  for (const Job& j : ExpandJobs(*r)) EXPECT_EQ(j.reference.spp, j.material == "ggx:0.01" ? 12 : 6) << j.material;
+  auto bad = ParseSpec(GroupSpec(R"([{"materials": ["ggx:0.01"]}])", R"(,
+  "reference": {"spp_by_material": {"ggx:0.3": 12}})"),
+                       "bad.json");
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().find("spp_by_material: ggx:0.3: not one of the spec's materials"), std::string::npos)
+      << bad.error();
+}
+
+TEST(Spec, AFitKeepsTheTopLevelMaterials) {
+  // A GGX-only variant is fitted on the top level's GGX material; the
+  // Beckmann material of a group is not fitted, so not refused.
+  auto r = ParseSpec(GroupSpec(R"([{"materials": ["beckmann:0.1"]}])", R"(,
+  "fit": {"variants": ["k16-ggx-rect-stable"], "param": "fp_max", )" + kShots +
+                                                                           "}"),
+                     "f.json");
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_EQ(r->materials, std::vector<std::string>{"ggx:0.1"});
+}
+
+TEST(Spec, TheJobBoundCountsEveryGroup) {
+  // 10000 x 6 points of tk19: 60000 jobs, within the bound alone; twice that with a group.
+  const std::string head =
+      "{\"name\": \"g\", \"scenes\": [\"sphere\"], \"materials\": [\"ggx:0.1\"], \"cameras\": [\"orbit\"], "
+      "\"variants\": [{\"name\": \"tk19\", \"params\": {\"kappa\": {\"from\": 0.01, \"to\": 1, \"steps\": 10000}, "
+      "\"sigma2\": [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]}}]";
+  ASSERT_TRUE(ParseSpec(head + "}", "g.json"));
+  const std::string e = ErrorOf(head + ", \"groups\": [{\"scenes\": [\"wires\"]}]}");
+  EXPECT_NE(e.find("groups: the spec expands to 120000 jobs (top level and groups together); at most 100000"),
+            std::string::npos)
+      << e;
+}
+
+}  // namespace
+}  // namespace shimmer::experiments

@@ -41,9 +41,11 @@ Job SpecJob(const Spec& spec, const std::string& scene, const std::string& mater
 // derivatives, so one derivative source stands for all.
 bool ReadsDerivatives(const std::string& variant);
 
-// The cross product, in a deterministic order (spec order, outermost first:
-// scene, material, camera, variant, parameter values, derivatives). A variant
-// that does not read derivatives gets one job, with the spec's first source.
+// Each cross product of AllGroups(spec) in turn, the top level first, each
+// in a deterministic order (spec order, outermost first: scene, material,
+// camera, variant, parameter values, derivatives). A variant that does not
+// read derivatives gets one job per shot, with its group's first source. A
+// job (by JobId) that is there already is left out: the first one stays.
 std::vector<Job> ExpandJobs(const Spec& spec);
 
 // 16 hex digits: FNV-1a 64 of the canonical JSON of the job, every parameter

@@ -1,6 +1,7 @@
 // An experiment spec: the cross product of scenes x materials x cameras x
-// variants (with parameter values) x derivative sources, at one resolution,
-// frame count and reference quality. Parsed and validated before any work.
+// variants (with parameter values) x derivative sources, plus one more such
+// cross product per entry of "groups", at one resolution, frame count and
+// reference quality. Parsed and validated before any work.
 #pragma once
 
 #include <map>
@@ -58,9 +59,10 @@ struct ShotSet {
   std::vector<std::string> scenes, cameras;
 };
 
-// One `fit` entry: for each of the spec's materials and each variant, the
-// value of `param` in [lo, hi] that minimises the objective on `train`,
-// validated on `validate` against the published `defaults`.
+// One `fit` entry: for each of the spec's top-level materials (not those of
+// its groups) and each variant, the value of `param` in [lo, hi] that
+// minimises the objective on `train`, validated on `validate` against the
+// published `defaults`.
 struct FitConfig {
   std::vector<std::string> variants;
   std::string param = "fp_max";
@@ -72,13 +74,27 @@ struct FitConfig {
   FitWeights weights;
 };
 
+// One cross product of shots and variants: scenes x materials x cameras x
+// variants (with parameter values) x derivative sources.
+struct ShotGroup {
+  std::vector<std::string> scenes;
+  std::vector<std::string> materials;
+  std::vector<std::string> cameras;
+  std::vector<VariantSweep> variants;
+  std::vector<std::string> derivatives;
+};
+
 struct Spec {
   std::string name;
+  // The top-level cross product (the first of AllGroups).
   std::vector<std::string> scenes;
   std::vector<std::string> materials;
   std::vector<std::string> cameras;
   std::vector<VariantSweep> variants;
   std::vector<std::string> derivatives{"quad"};
+  // Spec key "groups": more cross products, after the top-level one, each
+  // resolved (a key a group omits holds the top-level value).
+  std::vector<ShotGroup> groups;
   int width = 128, height = 128;
   int frames = 32;
   double fps = 30;
@@ -91,8 +107,12 @@ struct Spec {
   std::vector<FitConfig> fits;  // the `fit` section: one object or a list
 };
 
+// The top-level cross product, then each of spec.groups: every group of
+// shots a spec's jobs come from (ExpandJobs).
+std::vector<ShotGroup> AllGroups(const Spec& spec);
+
 // Bounds on what a spec may ask for (each is named in the error).
-inline constexpr int kMaxJobs = 100000;
+inline constexpr int kMaxJobs = 100000;  // all groups together
 inline constexpr int kMaxSweepPoints = 64;
 inline constexpr int kMaxRangeSteps = 10000;
 inline constexpr int kMaxSpecFrames = 4096;

@@ -90,5 +90,6 @@ void AddSweepCommand(CLI::App& app);
 void AddReportCommand(CLI::App& app);
 void AddFitCommand(CLI::App& app);
 void AddExportBlenderCommand(CLI::App& app);
+void AddSgAccuracyCommand(CLI::App& app);
 
 }  // namespace shimmer::cli

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   shimmer::cli::AddReportCommand(app);
   shimmer::cli::AddFitCommand(app);
   shimmer::cli::AddExportBlenderCommand(app);
+  shimmer::cli::AddSgAccuracyCommand(app);
   using shimmer::cli::kExitBadInput;
   using shimmer::cli::kExitFailure;
   try {

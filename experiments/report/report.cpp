@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <tuple>
@@ -12,6 +13,7 @@
 #include "report_parts.h"
 #include "shimmer/core/gnuplot.h"
 #include "shimmer/experiments/output_files.h"
+#include "shimmer/experiments/sg_accuracy.h"
 #include "shimmer/renderer/scene.h"
 #include "shimmer/renderer/shading.h"
 
@@ -194,6 +196,17 @@ Costs CostsOf(const Group& group) {
   return c;
 }
 
+std::optional<double> SgSharpnessOf(const std::vector<JobResult>& rows) {
+  std::set<std::string> seen;
+  for (const JobResult& r : rows) {
+    if (!seen.insert(r.job.scene).second) continue;
+    // A scene file that has gone since the run cannot say; it is not counted.
+    const auto scene = scene::LoadScene(r.job.scene);
+    if (scene && scene->light.type == shading::LightType::kSg) return scene->light.radius;
+  }
+  return std::nullopt;
+}
+
 }  // namespace report
 
 std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<double>& error) {
@@ -215,9 +228,28 @@ Status WriteReport(const std::vector<JobResult>& rows, const std::string& title,
   StagedDirectory& dir = **staged;
   if (Status s = dir.Write("report.csv", report::Csv(rows)); !s) return s;
   const std::vector<report::Group> groups = report::GroupRows(rows);
-  const report::Document doc = report::BuildDocument(groups, title, rows.size());
+  // Seed 004's approximations on their own, for stores with SG-lit shots only:
+  // every other report stays as it was.
+  std::optional<SgAccuracyTable> sg;
+  if (const std::optional<double> sharpness = report::SgSharpnessOf(rows)) {
+    SgAccuracyOptions options;
+    options.sharpness = *sharpness;
+    auto measured = MeasureSgAccuracy(options);
+    if (measured)
+      sg = std::move(*measured);
+    else if (warnings)
+      warnings->push_back("the report has no section \"" + std::string(report::kSgAccuracyHeading) +
+                          "\": " + measured.error());
+  }
+  const report::Document doc = report::BuildDocument(groups, title, rows.size(), sg ? &*sg : nullptr);
 
   std::vector<report::PlotFile> files;
+  if (sg) {
+    const std::string stem = report::kSgAccuracyStem;
+    files.push_back({stem + ".csv", SgAccuracyCsv(*sg)});
+    files.push_back({stem + ".dat", SgAccuracyPlotData(*sg)});
+    files.push_back({stem + ".gp", SgAccuracyPlotScript(*sg, stem), true});
+  }
   for (const report::Group& group : groups)
     for (report::PlotFile& f : report::Plots(group)) files.push_back(std::move(f));
   std::vector<const report::Group*> included;

@@ -269,6 +269,23 @@ void ShotTable(Document& doc, const Group& group) {
     doc.Paragraph("No filter stays within ±10 % energy in this table.");
 }
 
+// Seed 004's approximations measured on their own, beside the shots that use them.
+void SgAccuracySection(Document& doc, const SgAccuracyTable& sg) {
+  const std::string stem = kSgAccuracyStem;
+  doc.Heading(2, kSgAccuracyHeading);
+  doc.Paragraph(
+      "This store has shots lit by an SG light; the `sg-warp` and `asg-warp` variants shade them with "
+      "seed 004's approximations, measured here on their own, without pixels or motion (`shimmer "
+      "sg-accuracy`; numbers: [" +
+      stem + ".csv](" + stem + ".csv)). " + SgAccuracyDescription(sg));
+  const SgTextTable energy = SgEnergyTable(sg), relmse = SgRelmseTable(sg);
+  doc.Paragraph("**Energy**, Σ approx / Σ exact − 1 (SG warp / ASG warp):");
+  doc.Table(energy.header, energy.rows);
+  doc.Paragraph("**relmse** (SG warp / ASG warp):");
+  doc.Table(relmse.header, relmse.rows);
+  doc.Figures({stem + ".svg"}, {"SG lighting: energy error against view angle per α, SG warp and ASG warp"});
+}
+
 }  // namespace
 
 void Document::Heading(int level, const std::string& text) {
@@ -297,7 +314,8 @@ void Document::Figures(std::vector<std::string> files, std::vector<std::string> 
   blocks.push_back(std::move(b));
 }
 
-Document BuildDocument(const std::vector<Group>& groups, const std::string& title, std::size_t jobs) {
+Document BuildDocument(const std::vector<Group>& groups, const std::string& title, std::size_t jobs,
+                       const SgAccuracyTable* sg) {
   std::set<std::string> devices;
   for (const Group& g : groups)
     for (const JobResult* r : g.rows) devices.insert(DeviceOf(*r));
@@ -310,6 +328,7 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
                 "definitions: the method at the end. Raw rows: [report.csv](report.csv); this report as one page: " +
                 "[report.html](report.html).");
   Overview(doc, groups);
+  if (sg) SgAccuracySection(doc, *sg);
   doc.Heading(2, kShotsHeading);
   doc.Paragraph(
       "Ordered by scene, roughness α, camera and derivative source. Values carry their 95 % interval in "

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "report_parts.h"
+#include "shimmer/experiments/sg_accuracy.h"
 
 namespace shimmer::experiments::report {
 
@@ -44,8 +45,14 @@ inline constexpr const char* kRecommendationsHeading = "Recommendations";
 inline constexpr const char* kExcludedHeading = "Shots left out";
 inline constexpr const char* kShotsHeading = "Shots";
 inline constexpr const char* kMethodHeading = "Method";
+// Only in reports whose store has a shot lit by an SG light.
+inline constexpr const char* kSgAccuracyHeading = "SG lighting: accuracy of seed 004's approximations";
+// The files of that section, in the report's directory.
+inline constexpr const char* kSgAccuracyStem = "sg_accuracy";
 
-Document BuildDocument(const std::vector<Group>& groups, const std::string& title, std::size_t jobs);
+// `sg`: the SG approximation accuracy section after the overview (null: none).
+Document BuildDocument(const std::vector<Group>& groups, const std::string& title, std::size_t jobs,
+                       const SgAccuracyTable* sg = nullptr);
 
 std::string ToMarkdown(const Document& doc);
 // `svg_of(file)` returns a figure's SVG text, or nullopt when it was not drawn.

@@ -8,6 +8,7 @@
 
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -133,6 +134,10 @@ bool IsSupersample(const JobResult& row);
 std::string DeviceOf(const JobResult& row);  // "unrecorded" when empty
 
 std::string Csv(const std::vector<JobResult>& rows);
+
+// The light sharpness of the first row whose scene (scene::LoadScene) has an
+// SG light; nullopt when no row's does (or no scene loads).
+std::optional<double> SgSharpnessOf(const std::vector<JobResult>& rows);
 
 struct PlotFile {
   std::string name, text;

@@ -45,9 +45,17 @@ void JudgeConvergence(ShotCheck& c) {
   // filter can remove and no viewer can see (none already matches the
   // reference); its relative change is measured against that floor, else a
   // near-zero tv_err made only of reference noise fails the check forever.
+  // Each reference's own noise F adds to tv_err (the error's temporal
+  // variance holds the reference's per-pixel variance): doubling the samples
+  // per axis divides F by about four, which is the noise converging, not the
+  // reference's mean. A reference that integrates by Monte Carlo (SG lights)
+  // keeps such noise where none matches it closely; the change is judged on
+  // tv_err - F, the noise-free tv_err's estimate.
+  const double tv_err = std::max(c.tv_err - c.tv_err_noise, 0.0);
+  const double tv_err_check = std::max(c.tv_err_check - c.tv_err_noise_check, 0.0);
   const double tv_err_floor = kNegligibleTvErr * c.tv_ref;
-  c.d_tv_err = c.tv_err >= tv_err_floor ? RelativeChange(c.tv_err_check, c.tv_err)
-                                        : std::abs(c.tv_err_check - c.tv_err) / tv_err_floor;
+  c.d_tv_err = tv_err >= tv_err_floor ? RelativeChange(tv_err_check, tv_err)
+                                      : std::abs(tv_err_check - tv_err) / tv_err_floor;
   c.converged = c.d_energy_bias <= c.tol_energy && c.d_tv_ref <= c.tol_tv && c.d_tv_err <= c.tol_tv;
 }
 
@@ -106,6 +114,8 @@ Result<ShotCheck> CheckShot(const Job& shot_job, const RunOptions& options) {
   c.energy_bias_check = at_2n->energy_bias.value_or(0);
   c.tv_err = at_n->tv_err.value_or(0);
   c.tv_err_check = at_2n->tv_err.value_or(0);
+  c.tv_err_noise = c.tv_err * at_n->tv_err_floor.value_or(0);
+  c.tv_err_noise_check = c.tv_err_check * at_2n->tv_err_floor.value_or(0);
   c.unconverged_pixels = UnconvergedPixels(ref_dir);
   JudgeConvergence(c);
   std::error_code ec;

@@ -183,4 +183,8 @@ std::string_view LightTypeName(LightType type) {
 
 bool NeedsSgLight(const VariantInfo& info) { return info.id >= kFirstSgVariant && info.id <= kLastSgVariant; }
 
+bool ReadsFootprint(const VariantInfo& info) {
+  return info.name != "none" && info.name != "sg-warp" && info.name != "asg-warp";
+}
+
 }  // namespace shimmer::shading

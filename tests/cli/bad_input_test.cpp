@@ -520,6 +520,11 @@ std::vector<Case> UnitCases() {
       {"ReportNoSuchStore", Nothing(), "report nope.db -o rep", 2, "nope.db"},
       {"ReportNotAStore", File("r.db", "just text\n"), "report r.db -o rep", 2, "r.db"},
       {"ReportNoOutput", Nothing(), "report r.db", 2, "--output"},
+      // sg-accuracy (refused before the measurement)
+      {"SgAccuracyViewNinety", Nothing(), "sg-accuracy --view 30 90", 2, "--view must be in [0, 90), got 90"},
+      {"SgAccuracySamplesTooFew", Nothing(), "sg-accuracy --samples 2", 2, "--samples"},
+      {"SgAccuracyAlphaNan", Nothing(), "sg-accuracy --alpha 0.1,nan", 2, "--alpha"},
+      {"SgAccuracyOutUnderAFile", a_file, "sg-accuracy --samples 4 -o file/out", 2, "file/out"},
   };
 }
 

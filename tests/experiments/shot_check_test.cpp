@@ -57,5 +57,23 @@ TEST(ShotCheck, ATvErrBelowTheFloorIsJudgedAgainstTheFloorNotItself) {
   EXPECT_FALSE(from_zero.converged);
 }
 
+// A Monte Carlo reference's noise F is part of tv_err and shrinks when the
+// reference doubles its samples; what is judged is tv_err less F.
+TEST(ShotCheck, TheReferencesOwnNoiseIsTakenOutOfTvErr) {
+  ShotCheck noisy = Measured(7.0, 7.0, 0.0, 0.0, 0.028, 0.021);
+  JudgeConvergence(noisy);
+  EXPECT_FALSE(noisy.converged);  // a 25 % drop, all of it noise, but the check cannot tell
+  noisy.tv_err_noise = 0.0090;    // F at N, and a quarter of it at 2N
+  noisy.tv_err_noise_check = 0.00225;
+  JudgeConvergence(noisy);
+  EXPECT_NEAR(noisy.d_tv_err, std::abs(0.01875 / 0.019 - 1), 1e-12);
+  EXPECT_TRUE(noisy.converged);
+  // Noise does not excuse a moving mean.
+  ShotCheck biased = noisy;
+  biased.tv_err_check = 0.030;
+  JudgeConvergence(biased);
+  EXPECT_FALSE(biased.converged);
+}
+
 }  // namespace
 }  // namespace shimmer::experiments

@@ -143,6 +143,62 @@ TEST(GpuOracle, BumpyPlane) {
       ExpectMatchesOracle("bumpy-plane", v, d, 20.0);
 }
 
+// Spherical-Gaussian lights (seed 004): the closed-form warps, the exact BRDF
+// by the fixed quadrature for a point-sampled, a widening and a
+// density-filtering variant (each evaluated at every direction of the light
+// integral), on the three SG scenes.
+TEST(GpuOracle, SgLitScenes) {
+  for (const char* v : {"none", "sg-warp", "asg-warp-k16", "tk21", "k16-ggx-rect-stable"}) {
+    ExpectMatchesOracle("sg-sphere-field", v, DerivativeSource::kQuadFine);
+    ExpectMatchesOracle("sg-plane", v, DerivativeSource::kQuadFine, 1e30, "ggx:0.05");
+  }
+  for (const char* v : {"asg-warp", "sg-warp-k16"}) ExpectMatchesOracle("sg-plane", v, DerivativeSource::kAnalytic);
+  for (const char* v : {"none", "tk19"}) ExpectMatchesOracle("sg-bumpy-plane", v, DerivativeSource::kAnalytic, 20.0);
+}
+
+// The SG-light reference takes the light integral by Monte Carlo (one SG
+// direction and one GGX visible normal per sample), supersample-N by the
+// fixed quadrature at each of the same N x N sub-pixel positions' kind: over
+// a pixel the two must agree within the reference's standard error and the
+// quadrature's error (sg_test.cpp: within 1.7 %).
+TEST(GpuReference, SgLightMonteCarloAgreesWithTheQuadrature) {
+  RenderSettings s = Settings("sg-plane", "none", DerivativeSource::kAnalytic, 32);
+  s.material = scene::ParseMaterial("ggx:0.1", s.material).value();
+  s.reference_spp = 8;
+  s.reference_replicates = 8;
+  Frame mc = RenderOne(s, 1);
+  RenderSettings q = s;
+  q.reference_spp = 0;
+  q.variant = "supersample-16";
+  Frame quad = RenderOne(q, 1);
+  ASSERT_FALSE(mc.planes.empty());
+  ASSERT_FALSE(quad.planes.empty());
+  int within = 0, total = 0;
+  double sum_mc = 0, sum_quad = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const double a = f_lum(mc, x, y), b = f_lum(quad, x, y);
+      if (!(b > 0)) continue;
+      within += std::abs(a - b) <= 4 * mc.at(kStderr, x, y) + 0.02 * b;
+      sum_mc += a;
+      sum_quad += b;
+      ++total;
+    }
+  ASSERT_GT(total, 200);
+  EXPECT_GE(within, total * 97 / 100) << within << " of " << total;
+  EXPECT_NEAR(sum_mc / sum_quad, 1, 0.01);
+  // The Monte Carlo reference is noisy, the quadrature is not: its pixels
+  // carry a standard error.
+  EXPECT_GT(mc.at(kStderr, 16, 20), 0.0f);
+}
+
+TEST(GpuRender, SgVariantsNeedAnSgLight) {
+  RenderSettings s = Settings("sphere", "sg-warp", DerivativeSource::kQuadFine, 8);
+  auto r = Renderer::Create(s);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("spherical-Gaussian lights only"), std::string::npos) << r.error();
+}
+
 // The material's NDF reaches the kernel as a specialization constant; a
 // Beckmann material (isotropic and anisotropic) must shade as the oracle does.
 TEST(GpuOracle, BeckmannMaterials) {

@@ -31,7 +31,11 @@ struct ShotCheck {
   double tv_ref = 0, tv_ref_check = 0;
   double energy_bias = 0, energy_bias_check = 0;
   double tv_err = 0, tv_err_check = 0;
-  // |tv_ref_check / tv_ref - 1|, |energy_bias_check - energy_bias|, |tv_err_check / tv_err - 1|.
+  // F = mean stderr.Y^2 of each reference: the share of tv_err its own noise
+  // adds (docs/metrics.md, tv_err_floor). Rows from before it was kept: 0.
+  double tv_err_noise = 0, tv_err_noise_check = 0;
+  // |tv_ref_check / tv_ref - 1|, |energy_bias_check - energy_bias|, and the
+  // relative change of tv_err less each reference's noise F.
   double d_tv_ref = 0, d_energy_bias = 0, d_tv_err = 0;
   double tol_energy = 0.02, tol_tv = 0.10;  // the spec's reference.converge
   long long unconverged_pixels = 0;         // pixel-frames of the reference left above its tolerance at max_rounds
@@ -55,8 +59,9 @@ struct BenchmarkCost {
 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotCheck, reference_id, scene, material, camera, spp, check_spp,
                                                 tolerance, check_tolerance, tv_ref, tv_ref_check, energy_bias,
-                                                energy_bias_check, tv_err, tv_err_check, d_tv_ref, d_energy_bias,
-                                                d_tv_err, tol_energy, tol_tv, unconverged_pixels, converged)
+                                                energy_bias_check, tv_err, tv_err_check, tv_err_noise,
+                                                tv_err_noise_check, d_tv_ref, d_energy_bias, d_tv_err, tol_energy,
+                                                tol_tv, unconverged_pixels, converged)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BenchmarkCost, scene, derivatives, variant, params, material, camera,
                                                 width, height, repetitions, median_ms, min_ms, max_ms, none_median_ms,
                                                 ratio_to_none, device, driver)

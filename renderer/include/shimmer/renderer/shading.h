@@ -165,6 +165,9 @@ const VariantInfo* FindVariant(std::string_view name);
 // shade SG lights only; every other variant shades any light.
 inline constexpr int kFirstSgVariant = 14, kLastSgVariant = 17;
 bool NeedsSgLight(const VariantInfo& info);
+// Whether the variant's result depends on the shading footprint (none and the
+// unfiltered SG warps do not: one derivative source is enough for them).
+bool ReadsFootprint(const VariantInfo& info);
 
 // The four variant parameters, named once: what a variant may read, and the
 // values it accepts.
@@ -222,7 +225,7 @@ struct VariantName {
   const VariantInfo* info = nullptr;  // the catalogue entry; `none` for supersample-N
   int spp_n = 1;                      // N of supersample-N, 1 otherwise
   // True when the pixels read screen-space derivatives: not `none`, not supersample-N.
-  bool reads_derivatives() const { return kind == Kind::kCatalogue && info->id != 0; }
+  bool reads_derivatives() const { return kind == Kind::kCatalogue && ReadsFootprint(*info); }
 };
 inline constexpr int kMaxSupersampleN = 64;
 // The error names `name` and says what would be accepted.

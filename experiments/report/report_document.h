@@ -55,6 +55,8 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
                        const SgAccuracyTable* sg = nullptr);
 
 std::string ToMarkdown(const Document& doc);
+// One GitHub-flavoured table ('|' in cells escaped), ending in a newline.
+std::string MarkdownTable(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows);
 // `svg_of(file)` returns a figure's SVG text, or nullopt when it was not drawn.
 std::string ToHtml(const Document& doc, const std::function<std::optional<std::string>(const std::string&)>& svg_of);
 

@@ -15,6 +15,21 @@ std::string Cell(const std::string& text) {
 
 }  // namespace
 
+std::string MarkdownTable(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+  std::ostringstream md;
+  md << "|";
+  for (const std::string& h : header) md << " " << Cell(h) << " |";
+  md << "\n|";
+  for (std::size_t i = 0; i < header.size(); ++i) md << "---|";
+  md << "\n";
+  for (const auto& row : rows) {
+    md << "|";
+    for (const std::string& c : row) md << " " << Cell(c) << " |";
+    md << "\n";
+  }
+  return md.str();
+}
+
 std::string ToMarkdown(const Document& doc) {
   std::ostringstream md;
   md << "# " << doc.title << "\n\n";
@@ -27,17 +42,7 @@ std::string ToMarkdown(const Document& doc) {
         md << "\n";
         break;
       case Block::Kind::kTable:
-        md << "|";
-        for (const std::string& h : b.header) md << " " << Cell(h) << " |";
-        md << "\n|";
-        for (std::size_t i = 0; i < b.header.size(); ++i) md << "---|";
-        md << "\n";
-        for (const auto& row : b.cells) {
-          md << "|";
-          for (const std::string& c : row) md << " " << Cell(c) << " |";
-          md << "\n";
-        }
-        md << "\n";
+        md << MarkdownTable(b.header, b.cells) << "\n";
         break;
       case Block::Kind::kFigures:
         for (std::size_t i = 0; i < b.items.size(); ++i)

@@ -12,6 +12,7 @@
 #include "shimmer/core/staged_directory.h"
 #include "shimmer/experiments/csv.h"
 #include "shimmer/experiments/output_files.h"
+#include "report_document.h"
 
 namespace shimmer::experiments {
 
@@ -204,51 +205,27 @@ Result<SgAccuracyTable> MeasureSgAccuracy(const SgAccuracyOptions& options) {
   return table;
 }
 
-SgTextTable SgEnergyTable(const SgAccuracyTable& table) {
+namespace {
+// Rows alpha, columns view angle, each cell "SG / ASG" of one method field.
+template <class Format>
+SgTextTable MethodTable(const SgAccuracyTable& table, double SgMethodError::*field, Format format) {
   SgTextTable t{Header(table), {}};
   for (std::size_t i = 0; i < table.options.alphas.size(); ++i) {
     std::vector<std::string> row{FormatNumber(table.options.alphas[i], "%g")};
     for (std::size_t j = 0; j < table.options.views_deg.size(); ++j) {
       const SgAccuracyCell& c = table.At(i, j);
-      row.push_back(Percent(c.sg.energy) + " / " + Percent(c.asg.energy));
+      row.push_back(format(c.sg.*field) + " / " + format(c.asg.*field));
     }
     t.rows.push_back(std::move(row));
   }
   return t;
 }
+}  // namespace
 
-SgTextTable SgRelmseTable(const SgAccuracyTable& table) {
-  SgTextTable t{Header(table), {}};
-  for (std::size_t i = 0; i < table.options.alphas.size(); ++i) {
-    std::vector<std::string> row{FormatNumber(table.options.alphas[i], "%g")};
-    for (std::size_t j = 0; j < table.options.views_deg.size(); ++j) {
-      const SgAccuracyCell& c = table.At(i, j);
-      row.push_back(Small(c.sg.relmse) + " / " + Small(c.asg.relmse));
-    }
-    t.rows.push_back(std::move(row));
-  }
-  return t;
-}
+SgTextTable SgEnergyTable(const SgAccuracyTable& table) { return MethodTable(table, &SgMethodError::energy, Percent); }
+SgTextTable SgRelmseTable(const SgAccuracyTable& table) { return MethodTable(table, &SgMethodError::relmse, Small); }
 
-std::string SgMarkdownTable(const SgTextTable& table) {
-  auto cell = [](const std::string& text) {
-    std::string out;
-    for (char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
-    return out;
-  };
-  std::ostringstream md;
-  md << "|";
-  for (const std::string& h : table.header) md << " " << cell(h) << " |";
-  md << "\n|";
-  for (std::size_t i = 0; i < table.header.size(); ++i) md << "---|";
-  md << "\n";
-  for (const auto& row : table.rows) {
-    md << "|";
-    for (const std::string& c : row) md << " " << cell(c) << " |";
-    md << "\n";
-  }
-  return md.str();
-}
+std::string SgMarkdownTable(const SgTextTable& table) { return report::MarkdownTable(table.header, table.rows); }
 
 std::string SgAccuracyDescription(const SgAccuracyTable& table) {
   const SgAccuracyOptions& o = table.options;

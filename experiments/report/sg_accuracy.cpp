@@ -7,12 +7,12 @@
 #include <sstream>
 #include <utility>
 
+#include "report_document.h"
 #include "shimmer/core/gnuplot.h"
 #include "shimmer/core/number_text.h"
 #include "shimmer/core/staged_directory.h"
 #include "shimmer/experiments/csv.h"
 #include "shimmer/experiments/output_files.h"
-#include "report_document.h"
 
 namespace shimmer::experiments {
 

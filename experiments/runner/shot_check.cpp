@@ -54,8 +54,8 @@ void JudgeConvergence(ShotCheck& c) {
   const double tv_err = std::max(c.tv_err - c.tv_err_noise, 0.0);
   const double tv_err_check = std::max(c.tv_err_check - c.tv_err_noise_check, 0.0);
   const double tv_err_floor = kNegligibleTvErr * c.tv_ref;
-  c.d_tv_err = tv_err >= tv_err_floor ? RelativeChange(tv_err_check, tv_err)
-                                      : std::abs(tv_err_check - tv_err) / tv_err_floor;
+  c.d_tv_err =
+      tv_err >= tv_err_floor ? RelativeChange(tv_err_check, tv_err) : std::abs(tv_err_check - tv_err) / tv_err_floor;
   c.converged = c.d_energy_bias <= c.tol_energy && c.d_tv_ref <= c.tol_tv && c.d_tv_err <= c.tol_tv;
 }
 

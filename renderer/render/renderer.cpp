@@ -238,8 +238,11 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
     return R::Failure("device '" + dev.name +
                       "' has no subgroup quad operations in compute shaders; use analytic derivatives");
 
-  const std::int32_t spec[] = {im.variant.id, static_cast<std::int32_t>(settings.derivatives), im.variant.spp_n,
-                               scene::SceneFeatures(settings.scene), static_cast<std::int32_t>(settings.material.ndf),
+  const std::int32_t spec[] = {im.variant.id,
+                               static_cast<std::int32_t>(settings.derivatives),
+                               im.variant.spp_n,
+                               scene::SceneFeatures(settings.scene),
+                               static_cast<std::int32_t>(settings.material.ndf),
                                im.variant.reference ? 1 : 0};
   using vk::BufferKind;
   const BufferKind kinds[] = {BufferKind::kUniform, BufferKind::kStorage, BufferKind::kStorage, BufferKind::kStorage};

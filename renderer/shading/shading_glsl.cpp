@@ -248,7 +248,8 @@ auto FlatSgPoint(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3,
 template <class T>
 glm::vec<3, T> SgLightSpecularEstimate(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3, T> view,
                                        glm::vec<3, T> f0, glm::vec<2, T> u_light, glm::vec<2, T> u_brdf) {
-  return sgSpecular(FlatSgPoint(light, normal, alpha, view, f0), glm::vec<4, T>(u_light, glm::vec<2, T>(u_brdf.y, u_brdf.x)));
+  return sgSpecular(FlatSgPoint(light, normal, alpha, view, f0),
+                    glm::vec<4, T>(u_light, glm::vec<2, T>(u_brdf.y, u_brdf.x)));
 }
 template <class T>
 glm::vec<3, T> SgLightSpecularQuadrature(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3, T> view,
@@ -272,25 +273,25 @@ T SgDirectionPdf(const Sg<T>& light, glm::vec<3, T> dir) {
   return sgDirectionPdf(ToGlsl(light), dir);
 }
 
-#define SHIMMER_INSTANTIATE(T)                                                                                    \
-  template glm::vec<3, T> SgLightSpecularEstimate<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>,             \
-                                                     glm::vec<3, T>, glm::vec<2, T>, glm::vec<2, T>);             \
-  template glm::vec<3, T> SgLightSpecularQuadrature<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>,           \
-                                                       glm::vec<3, T>);                                           \
-  template glm::vec<3, T> SgIrradiance<T>(const Sg<T>&, glm::vec<3, T>);                                          \
-  template glm::vec<3, T> SgIrradianceEstimate<T>(const Sg<T>&, glm::vec<3, T>, glm::vec<2, T>);                  \
-  template glm::vec<3, T> SgSampleDirection<T>(const Sg<T>&, glm::vec<2, T>);                                     \
-  template T SgDirectionPdf<T>(const Sg<T>&, glm::vec<3, T>);                                                     \
-  template glm::vec<3, T> SgEvaluate<T>(const Sg<T>&, glm::vec<3, T>);                                            \
-  template glm::vec<3, T> SgIntegral<T>(const Sg<T>&);                                                            \
-  template glm::vec<3, T> SgInnerProduct<T>(const Sg<T>&, const Sg<T>&);                                          \
-  template T OneMinusExpNegOver<T>(T);                                                                            \
-  template Sg<T> DistributionTermSg<T>(glm::vec<3, T>, T);                                                        \
-  template Sg<T> WarpDistributionSg<T>(const Sg<T>&, glm::vec<3, T>);                                             \
-  template Asg<T> WarpDistributionAsg<T>(const Sg<T>&, glm::vec<3, T>);                                           \
-  template glm::vec<3, T> AsgEvaluate<T>(const Asg<T>&, glm::vec<3, T>);                                          \
-  template glm::vec<3, T> ConvolveAsgSg<T>(const Asg<T>&, const Sg<T>&);                                          \
-  template glm::vec<3, T> SpecularTermSgWarp<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>, glm::vec<3, T>); \
+#define SHIMMER_INSTANTIATE(T)                                                                                        \
+  template glm::vec<3, T> SgLightSpecularEstimate<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>, glm::vec<3, T>, \
+                                                     glm::vec<2, T>, glm::vec<2, T>);                                 \
+  template glm::vec<3, T> SgLightSpecularQuadrature<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>,               \
+                                                       glm::vec<3, T>);                                               \
+  template glm::vec<3, T> SgIrradiance<T>(const Sg<T>&, glm::vec<3, T>);                                              \
+  template glm::vec<3, T> SgIrradianceEstimate<T>(const Sg<T>&, glm::vec<3, T>, glm::vec<2, T>);                      \
+  template glm::vec<3, T> SgSampleDirection<T>(const Sg<T>&, glm::vec<2, T>);                                         \
+  template T SgDirectionPdf<T>(const Sg<T>&, glm::vec<3, T>);                                                         \
+  template glm::vec<3, T> SgEvaluate<T>(const Sg<T>&, glm::vec<3, T>);                                                \
+  template glm::vec<3, T> SgIntegral<T>(const Sg<T>&);                                                                \
+  template glm::vec<3, T> SgInnerProduct<T>(const Sg<T>&, const Sg<T>&);                                              \
+  template T OneMinusExpNegOver<T>(T);                                                                                \
+  template Sg<T> DistributionTermSg<T>(glm::vec<3, T>, T);                                                            \
+  template Sg<T> WarpDistributionSg<T>(const Sg<T>&, glm::vec<3, T>);                                                 \
+  template Asg<T> WarpDistributionAsg<T>(const Sg<T>&, glm::vec<3, T>);                                               \
+  template glm::vec<3, T> AsgEvaluate<T>(const Asg<T>&, glm::vec<3, T>);                                              \
+  template glm::vec<3, T> ConvolveAsgSg<T>(const Asg<T>&, const Sg<T>&);                                              \
+  template glm::vec<3, T> SpecularTermSgWarp<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>, glm::vec<3, T>);     \
   template glm::vec<3, T> SpecularTermAsgWarp<T>(const Sg<T>&, glm::vec<3, T>, T, glm::vec<3, T>, glm::vec<3, T>);
 SHIMMER_INSTANTIATE(float)
 SHIMMER_INSTANTIATE(double)

@@ -763,10 +763,10 @@ TEST(SgLightMonteCarlo, UnbiasedAndItsErrorShrinksLikeInverseSqrtN) {
     auto run = [&](int count, double* mean, double* se) {
       double sum = 0, sum2 = 0;
       for (int i = 0; i < count; ++i) {
-        const double x = SgLightSpecularEstimate(light, n, c.alpha, v, dvec3(0.04),
-                                                 glm::dvec2(uniform(rng), uniform(rng)),
-                                                 glm::dvec2(uniform(rng), uniform(rng)))
-                             .x;
+        const double x =
+            SgLightSpecularEstimate(light, n, c.alpha, v, dvec3(0.04), glm::dvec2(uniform(rng), uniform(rng)),
+                                    glm::dvec2(uniform(rng), uniform(rng)))
+                .x;
         ASSERT_TRUE(std::isfinite(x) && x >= 0);
         sum += x;
         sum2 += x * x;
@@ -790,8 +790,10 @@ TEST(SgLightMonteCarlo, UnbiasedAndItsErrorShrinksLikeInverseSqrtN) {
       EXPECT_LT(se1 / se4, 2.5) << at;
     }
   }
-  std::printf("SG light Monte Carlo: %d of %d cases beyond 3 standard errors; standard error ratio 4000 vs 16000 draws %.2f..%.2f\n",
-              outside, cases, lo_ratio, hi_ratio);
+  std::printf(
+      "SG light Monte Carlo: %d of %d cases beyond 3 standard errors; standard error ratio 4000 vs 16000 draws "
+      "%.2f..%.2f\n",
+      outside, cases, lo_ratio, hi_ratio);
   // 3 standard errors hold for 99.7 % of normal draws; a few outside in 54 cases is chance.
   EXPECT_LE(outside, 2) << "of " << cases;
 }

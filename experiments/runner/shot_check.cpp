@@ -45,17 +45,22 @@ void JudgeConvergence(ShotCheck& c) {
   // filter can remove and no viewer can see (none already matches the
   // reference); its relative change is measured against that floor, else a
   // near-zero tv_err made only of reference noise fails the check forever.
-  // Each reference's own noise F adds to tv_err (the error's temporal
-  // variance holds the reference's per-pixel variance): doubling the samples
-  // per axis divides F by about four, which is the noise converging, not the
-  // reference's mean. A reference that integrates by Monte Carlo (SG lights)
-  // keeps such noise where none matches it closely; the change is judged on
-  // tv_err - F, the noise-free tv_err's estimate.
-  const double tv_err = std::max(c.tv_err - c.tv_err_noise, 0.0);
-  const double tv_err_check = std::max(c.tv_err_check - c.tv_err_noise_check, 0.0);
   const double tv_err_floor = kNegligibleTvErr * c.tv_ref;
-  c.d_tv_err =
-      tv_err >= tv_err_floor ? RelativeChange(tv_err_check, tv_err) : std::abs(tv_err_check - tv_err) / tv_err_floor;
+  auto change = [tv_err_floor](double at_n, double at_2n) {
+    return at_n >= tv_err_floor ? RelativeChange(at_2n, at_n) : std::abs(at_2n - at_n) / tv_err_floor;
+  };
+  // Each reference's own noise F (mean stderr.Y^2) may add to tv_err:
+  // doubling the samples per axis divides F by four or more, which is the
+  // noise converging, not the reference's mean. A Monte Carlo reference (SG
+  // lights) keeps such noise where `none` matches it closely, and there tv_err
+  // falls with F; tv_err - F, the noise-free tv_err's estimate, then holds
+  // still. Where the replicates' spread overstates what reaches tv_err
+  // (measured: rough delta-lit spheres, F ~ tv_err at N, tv_err unchanged at
+  // 2N), tv_err itself holds still. Either is convergence.
+  const double raw = change(c.tv_err, c.tv_err_check);
+  const double denoised =
+      change(std::max(c.tv_err - c.tv_err_noise, 0.0), std::max(c.tv_err_check - c.tv_err_noise_check, 0.0));
+  c.d_tv_err = std::min(raw, denoised);
   c.converged = c.d_energy_bias <= c.tol_energy && c.d_tv_ref <= c.tol_tv && c.d_tv_err <= c.tol_tv;
 }
 

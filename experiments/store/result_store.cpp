@@ -438,7 +438,10 @@ Status ResultStore::InsertShot(const ShotCheck& shot) {
 }
 
 Result<std::vector<ShotCheck>> ResultStore::Shots() {
-  return TypedRows<ShotCheck>(db_, "SELECT check_json FROM shots ORDER BY reference_id", path_, "shot");
+  auto shots = TypedRows<ShotCheck>(db_, "SELECT check_json FROM shots ORDER BY reference_id", path_, "shot");
+  if (!shots) return shots;
+  for (ShotCheck& shot : *shots) JudgeConvergence(shot);
+  return shots;
 }
 
 Status ResultStore::InsertBenchmarks(const std::vector<BenchmarkCost>& costs) {

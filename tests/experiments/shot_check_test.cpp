@@ -70,9 +70,18 @@ TEST(ShotCheck, TheReferencesOwnNoiseIsTakenOutOfTvErr) {
   EXPECT_TRUE(noisy.converged);
   // Noise does not excuse a moving mean.
   ShotCheck biased = noisy;
-  biased.tv_err_check = 0.030;
+  biased.tv_err_check = 0.034;
   JudgeConvergence(biased);
   EXPECT_FALSE(biased.converged);
+  // A tv_err that holds still converges whatever the replicates' spread says
+  // (standard spec, sphere-field at alpha 0.5: F ~ 0.4 tv_err at N, an
+  // eighth of that at 2N, tv_err the same to 0.1 %).
+  ShotCheck still = Measured(2.628e-5, 2.628e-5, 0.0, 0.0, 1.2487e-6, 1.2477e-6);
+  still.tv_err_noise = 4.98e-7;
+  still.tv_err_noise_check = 6.13e-8;
+  JudgeConvergence(still);
+  EXPECT_NEAR(still.d_tv_err, 1.0e-3 / 1.2487, 1e-4);
+  EXPECT_TRUE(still.converged);
 }
 
 }  // namespace

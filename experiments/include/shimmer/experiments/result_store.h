@@ -57,6 +57,16 @@ struct BenchmarkCost {
   std::string device, driver;
 };
 
+// Fills the changes (d_tv_ref, d_energy_bias, d_tv_err) and the verdict of a
+// check from its measured metrics and tolerances. A tv_err below 0.1 % of
+// tv_ref is measured against that floor: `none` already matches the
+// reference there, and a relative change of reference noise means nothing.
+// tv_err passes when it holds still, or when its change is the reference's
+// own noise converging (tv_err - F holds still). The store re-judges every
+// shot it reads, so verdicts follow this rule, not the one of the run that
+// measured them (runner/shot_check.cpp).
+void JudgeConvergence(ShotCheck& check);
+
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotCheck, reference_id, scene, material, camera, spp, check_spp,
                                                 tolerance, check_tolerance, tv_ref, tv_ref_check, energy_bias,
                                                 energy_bias_check, tv_err, tv_err_check, tv_err_noise,

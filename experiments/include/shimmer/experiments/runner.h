@@ -68,12 +68,6 @@ Status EnsureReference(const Job& job, const RunOptions& options);
 // adaptive), compared with the spec's reference.converge.
 Result<ShotCheck> CheckShot(const Job& job, const RunOptions& options);
 
-// Fills the changes (d_tv_ref, d_energy_bias, d_tv_err) and the verdict of a
-// check from its measured metrics and tolerances. A tv_err below 0.1 % of
-// tv_ref is measured against that floor: `none` already matches the
-// reference there, and a relative change of reference noise means nothing.
-void JudgeConvergence(ShotCheck& check);
-
 // The variants of one (scene, derivative source), `none` first, each as a job
 // of the batch's material and camera (the first job's).
 struct BenchmarkBatch {

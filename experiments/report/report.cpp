@@ -207,6 +207,11 @@ std::optional<double> SgSharpnessOf(const std::vector<JobResult>& rows) {
   return std::nullopt;
 }
 
+bool SgLitScene(const std::string& scene) {
+  const auto loaded = scene::LoadScene(scene);
+  return loaded && loaded->light.type == shading::LightType::kSg;
+}
+
 }  // namespace report
 
 std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<double>& error) {

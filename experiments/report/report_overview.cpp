@@ -80,7 +80,8 @@ Verdict ClassVerdict(int better, int worse, int overlapping) {
 }
 
 std::string RecommendationRule() {
-  return "Per class, a variant other than `none` qualifies when it was measured in at least 3/4 of the class's "
+  return "Per class (shots lit by a spherical Gaussian form their own class, since they run their own variants), "
+         "a variant other than `none` qualifies when it was measured in at least 3/4 of the class's "
          "tables and its |energy_bias| stays within 0.10 in at least 3/4 of those. The pick is the qualifier with the "
          "lowest median `tv_err` ratio to `none`, provided that median is below 1 (else: keep `none`). "
          "`supersample-N` is the brute-force baseline: it qualifies only when its median benchmark cost ratio is "
@@ -101,6 +102,12 @@ std::vector<Recommendation> Recommend(const std::vector<const Group*>& groups) {
     return int(std::find(order.begin(), order.end(), name) - order.begin());
   };
   for (const Group* g : groups) {
+    // SG-lit shots run their own variant list: in the delta-lit classes they
+    // would count as tables the other filters were not measured in.
+    if (SgLitScene(g->scene)) {
+      classes[{200, "light"}].push_back(g);
+      continue;
+    }
     classes[{rank(kRoughness, RoughnessClass(g->alpha)), "roughness"}].push_back(g);
     classes[{100 + rank(kGeometry, GeometryClass(g->scene)), "geometry"}].push_back(g);
   }
@@ -108,8 +115,9 @@ std::vector<Recommendation> Recommend(const std::vector<const Group*>& groups) {
   for (auto& [key, members] : classes) {
     Recommendation rec;
     rec.dimension = key.second;
-    rec.name =
-        rec.dimension == "roughness" ? RoughnessClass(members.front()->alpha) : GeometryClass(members.front()->scene);
+    rec.name = rec.dimension == "roughness" ? RoughnessClass(members.front()->alpha)
+               : rec.dimension == "light"   ? "spherical Gaussian"
+                                            : GeometryClass(members.front()->scene);
     rec.tables = int(members.size());
     std::set<std::string> shots;
     for (const Group* g : members) shots.insert(g->Shot());

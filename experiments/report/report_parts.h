@@ -40,6 +40,9 @@ std::vector<Group> GroupRows(const std::vector<JobResult>& rows);
 double AlphaOf(const std::string& material);
 std::string RoughnessClass(double alpha);  // "α ≤ 0.02", "0.02 < α ≤ 0.1", "0.1 < α ≤ 0.3", "α > 0.3"
 std::string GeometryClass(const std::string& scene);
+// Whether the scene is lit by a spherical Gaussian (a scene file that has gone
+// since the run: no).
+bool SgLitScene(const std::string& scene);
 
 // A metric's 95 % interval, metrics.ci95[key] = [lo, hi]; unknown when the
 // store predates intervals.

@@ -11,5 +11,4 @@ plot 'bumpy_plane___ggx_0_01___orbit___analytic_pareto.dat' index 0 using 1:2 wi
      'bumpy_plane___ggx_0_01___orbit___analytic_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
      keyentry with points pt 6 lc rgb '#d62728' title '1: k16-beckmann-rect fp_max=1', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: k16-beckmann-rect fp_max=0.25', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: tk21', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: k16-beckmann-parallelogram'
+     keyentry with points pt 6 lc rgb '#d62728' title '3: k16-beckmann-parallelogram'

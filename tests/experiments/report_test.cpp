@@ -199,6 +199,37 @@ TEST(ReportOverview, RecommendationPicksPerClass) {
   EXPECT_EQ(recs2.front().pick->label, "supersample-4");
 }
 
+// SG-lit shots run their own variants: they form their own class and stay
+// out of the delta-lit roughness and geometry classes, where they would be
+// tables the delta-lit filters were never measured in.
+TEST(ReportOverview, SgLitShotsAreTheirOwnClass) {
+  std::vector<JobResult> rows;
+  for (const char* camera : {"orbit", "dolly"}) {
+    auto add = [&](const char* scene, const char* v, double err) {
+      rows.push_back(Row(scene, "ggx:0.05", v, err, 0.0));
+      rows.back().job.camera = camera;
+    };
+    add("sphere", "none", 1.0);
+    add("sphere", "unity-hdrp", 0.3);
+    add("sg-plane", "none", 1.0);
+    add("sg-plane", "asg-warp", 2.0);
+    add("sg-plane", "tk21", 0.9);
+  }
+  const std::vector<Group> groups = GroupRows(rows);
+  std::map<std::string, const Recommendation*> by_name;
+  const auto recs = Recommend(Pointers(groups));
+  for (const Recommendation& r : recs) by_name[r.dimension + ": " + r.name] = &r;
+  ASSERT_EQ(by_name.count("light: spherical Gaussian"), 1u);
+  const Recommendation* sg = by_name.at("light: spherical Gaussian");
+  EXPECT_EQ(sg->tables, 2);
+  ASSERT_NE(sg->pick, nullptr);
+  EXPECT_EQ(sg->pick->label, "tk21");
+  const Recommendation* rough = by_name.at("roughness: 0.02 < α ≤ 0.1");
+  EXPECT_EQ(rough->tables, 2);  // sphere only
+  ASSERT_NE(rough->pick, nullptr);
+  EXPECT_EQ(rough->pick->label, "unity-hdrp");
+}
+
 // Intervals decide the verdict: overlapping → indistinguishable, separate → better.
 TEST(ReportOverview, PickAgainstRunnerUpByIntervals) {
   auto rows_with = [](double half) {

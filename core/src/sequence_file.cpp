@@ -108,7 +108,9 @@ json ToJson(const SequenceFile& s) {
       {"revision", s.revision},
       {"timings_ms",
        {{"shader_compile", s.timings.shader_compile_ms},
+        {"specialize", s.timings.specialize_ms},
         {"pipeline_create", s.timings.pipeline_create_ms},
+        {"startup", s.timings.startup_ms},
         {"first_dispatch_jit", s.timings.first_dispatch_jit_ms},
         {"render_wall", s.timings.render_wall_ms},
         {"readback", s.timings.readback_ms},
@@ -201,7 +203,9 @@ Result<SequenceFile> SequenceFromJson(const json& j, const std::string& source) 
     if (!tj.is_object()) return R::Failure(source + ": \"timings_ms\" must be an object");
     FieldReader tr(tj, source + ": timings_ms");
     tr.Read("shader_compile", &s.timings.shader_compile_ms);
+    tr.Read("specialize", &s.timings.specialize_ms);
     tr.Read("pipeline_create", &s.timings.pipeline_create_ms);
+    tr.Read("startup", &s.timings.startup_ms);
     tr.Read("first_dispatch_jit", &s.timings.first_dispatch_jit_ms);
     tr.Read("render_wall", &s.timings.render_wall_ms);
     tr.Read("readback", &s.timings.readback_ms);

@@ -120,17 +120,6 @@ std::vector<Job> ExpandJobs(const Spec& spec) {
   return jobs;
 }
 
-std::string Fnv1a64Hex(std::string_view text) {
-  std::uint64_t h = 14695981039346656037ull;  // the FNV-1a 64 offset basis
-  for (unsigned char c : text) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
-}
-
 std::string CoreVersionOf(std::span<const std::pair<std::string_view, std::string_view>> sources,
                           std::string_view root) {
   // The files the render kernel compiles: `root` and what it #includes,

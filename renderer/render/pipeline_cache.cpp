@@ -2,11 +2,18 @@
 
 #include <cctype>
 #include <chrono>
+#include <cstring>
+#include <functional>
 #include <map>
 #include <mutex>
+#include <optional>
+#include <set>
 #include <sstream>
 #include <string_view>
 #include <tuple>
+
+#include "kernel_disk_cache.h"
+#include "shimmer/core/content_hash.h"
 
 namespace shimmer::render {
 
@@ -80,8 +87,59 @@ std::string UserVariantError(const std::string& log, const std::string& user_fil
 
 struct SpirvCache {
   std::mutex mutex;
-  std::map<std::string, std::shared_ptr<const shading::Spirv>> modules;
+  std::map<std::string, std::shared_ptr<const KernelModule>> modules;
 };
+
+// Each cache folder is trimmed to this once per process, before its first
+// write: a specialized module is ~140 KB, a kernel ~190 KB, so this holds a
+// few thousand pipelines' worth, far more than a spec uses.
+constexpr std::uintmax_t kCacheFolderBytes = std::uintmax_t(256) << 20;
+
+std::optional<std::filesystem::path> CacheFolder(std::string_view name) {
+  auto root = KernelCacheDirectory();
+  if (!root) return std::nullopt;
+  return *root / name;
+}
+
+void WriteTrimmed(const std::filesystem::path& folder, const std::string& file, std::string_view kind,
+                  std::string_view payload) {
+  static std::mutex mutex;
+  static auto* trimmed = new std::set<std::filesystem::path>;  // leaked, like the caches
+  {
+    std::lock_guard lock(mutex);
+    if (trimmed->insert(folder).second) TrimCacheFolder(folder, kCacheFolderBytes);
+  }
+  WriteCacheFile(folder / file, kind, payload);
+}
+
+std::string_view AsBytes(const shading::Spirv& words) {
+  return {reinterpret_cast<const char*>(words.data()), words.size() * sizeof(std::uint32_t)};
+}
+
+// SPIR-V words from a cache payload, or nothing (with a warning) when it is
+// not a SPIR-V module.
+std::optional<shading::Spirv> SpirvOf(const std::string& payload, const std::filesystem::path& file) {
+  constexpr std::uint32_t kSpirvMagic = 0x07230203;
+  shading::Spirv words(payload.size() / sizeof(std::uint32_t));
+  std::memcpy(words.data(), payload.data(), words.size() * sizeof(std::uint32_t));
+  if (payload.size() % sizeof(std::uint32_t) != 0 || words.size() < 5 || words[0] != kSpirvMagic) {
+    WarnCache("ignoring the kernel cache file " + file.string() + " (not a SPIR-V module); it will be rebuilt");
+    return std::nullopt;
+  }
+  return words;
+}
+
+// A module from `folder/file` when cached there, else made by `make` and
+// cached. `made` says whether `make` ran.
+Result<shading::Spirv> CachedSpirv(const std::optional<std::filesystem::path>& folder, const std::string& file,
+                                   const std::function<Result<shading::Spirv>()>& make) {
+  if (folder)
+    if (auto payload = ReadCacheFile(*folder / file, "spirv"))
+      if (auto words = SpirvOf(*payload, *folder / file)) return std::move(*words);
+  auto made = make();
+  if (made && folder) WriteTrimmed(*folder, file, "spirv", AsBytes(*made));
+  return made;
+}
 
 }  // namespace
 
@@ -90,7 +148,7 @@ struct PipelineSlot {
   std::shared_ptr<vk::ComputePipeline> pipeline;
   Error error;
 };
-using PipelineKey = std::pair<const shading::Spirv*, std::vector<std::int32_t>>;
+using PipelineKey = std::tuple<const KernelModule*, std::vector<std::int32_t>, bool>;
 struct DevicePipelines {
   std::mutex mutex;  // guards `slots`
   std::map<PipelineKey, std::shared_ptr<PipelineSlot>> slots;
@@ -115,8 +173,8 @@ DeviceCache& Devices() {
 
 }  // namespace
 
-Result<std::shared_ptr<const shading::Spirv>> KernelSpirv(const std::string& user_text, const std::string& user_file,
-                                                          bool sg_light, double* compile_ms) {
+Result<std::shared_ptr<const KernelModule>> KernelSpirv(const std::string& user_text, const std::string& user_file,
+                                                        bool sg_light, double* compile_ms) {
   const bool user = !user_file.empty();
   const std::string key = std::string(sg_light ? "sg:" : "delta:") + (user ? "user:" + user_text : std::string());
   const auto t0 = Clock::now();
@@ -125,12 +183,16 @@ Result<std::shared_ptr<const shading::Spirv>> KernelSpirv(const std::string& use
   shading::GlslFile main;
   std::vector<shading::GlslFile> extra = KernelFiles(user, sg_light, &main);
   if (user) extra.push_back({std::string(kUserVariantFile), user_text});
-  auto compiled = shading::CompileCompute(main, extra);
+  const std::string compile_key = shading::CompileKey(main, extra);
+  // Only modules that compiled are cached: a user's broken file is compiled
+  // (and its error reported) every time.
+  auto compiled =
+      CachedSpirv(CacheFolder("spirv"), compile_key + ".spv", [&] { return shading::CompileCompute(main, extra); });
   if (!compiled) {
     if (!user) return Prefixed("render.comp does not compile", compiled.failure());
-    return Result<std::shared_ptr<const shading::Spirv>>::Failure(UserVariantError(compiled.error(), user_file));
+    return Result<std::shared_ptr<const KernelModule>>::Failure(UserVariantError(compiled.error(), user_file));
   }
-  auto module = std::make_shared<const shading::Spirv>(std::move(*compiled));
+  auto module = std::make_shared<const KernelModule>(KernelModule{std::move(*compiled), compile_key});
   Modules().modules.emplace(key, module);
   if (compile_ms) *compile_ms = MsSince(t0);
   return module;
@@ -154,27 +216,90 @@ Result<DeviceHandle> AcquireDevice(const vk::ContextOptions& options) {
   return entry;
 }
 
+namespace {
+
+// What a pipeline cache file is valid for: the driver's own identity (the
+// header check in vk::Context::CreatePipelineCache) and its build.
+std::string DeviceKey(const vk::DeviceInfo& d) {
+  return Fnv1a64Hex(d.name + '\0' + d.driver + '\0' + std::to_string(d.vendor_id) + '\0' + std::to_string(d.device_id) +
+                    '\0' + std::to_string(d.driver_version) + '\0' + d.pipeline_cache_uuid);
+}
+
+// The driver's pipeline cache seeded from disk, or an empty one when there is
+// no file, the file is damaged, or the driver's header check refuses it.
+Result<std::unique_ptr<vk::PipelineCache>> LoadPipelineCache(vk::Context& context,
+                                                             const std::optional<std::filesystem::path>& file,
+                                                             std::size_t* loaded_bytes) {
+  *loaded_bytes = 0;
+  if (file)
+    if (auto data = ReadCacheFile(*file, "vulkan-pipeline-cache")) {
+      auto seeded = context.CreatePipelineCache(*data);
+      if (seeded) {
+        *loaded_bytes = data->size();
+        return seeded;
+      }
+      WarnCache("ignoring the kernel cache file " + file->string() + " (" + seeded.error() + "); it will be rebuilt");
+    }
+  return context.CreatePipelineCache();
+}
+
+}  // namespace
+
 Result<std::shared_ptr<vk::ComputePipeline>> AcquirePipeline(const DeviceHandle& device,
-                                                             const std::shared_ptr<const shading::Spirv>& spirv,
+                                                             const std::shared_ptr<const KernelModule>& kernel,
                                                              std::span<const std::int32_t> specialization,
                                                              std::span<const vk::BufferKind> bindings,
-                                                             std::uint32_t push_bytes, double* pipeline_ms) {
+                                                             std::uint32_t push_bytes, PipelineTimes* times,
+                                                             bool driver_specializes) {
   std::shared_ptr<PipelineSlot> slot;
   {
-    // The SPIR-V modules live as long as the process, so their address is a key.
+    // The kernel modules live as long as the process, so their address is a key.
     std::lock_guard lock(device.pipelines->mutex);
-    auto& entry = device.pipelines->slots[{spirv.get(), {specialization.begin(), specialization.end()}}];
+    auto& entry =
+        device.pipelines->slots[{kernel.get(), {specialization.begin(), specialization.end()}, driver_specializes}];
     if (!entry) entry = std::make_shared<PipelineSlot>();
     slot = entry;
   }
   std::call_once(slot->compiled, [&] {
+    if (driver_specializes) {
+      const auto t0 = Clock::now();
+      auto pipeline = device.context->CreatePipeline(kernel->spirv, specialization, bindings, push_bytes);
+      if (times) times->pipeline_ms = MsSince(t0);
+      if (pipeline)
+        slot->pipeline = std::shared_ptr<vk::ComputePipeline>(std::move(*pipeline));
+      else
+        slot->error = pipeline.failure();
+      return;
+    }
+    std::string constants;
+    for (std::int32_t c : specialization) constants += std::to_string(c) + ",";
+    const std::string key = Fnv1a64Hex(kernel->key + '\0' + constants + '\0' + shading::SpecializerVersion());
     const auto t0 = Clock::now();
-    auto pipeline = device.context->CreatePipeline(*spirv, specialization, bindings, push_bytes);
-    if (pipeline)
-      slot->pipeline = std::shared_ptr<vk::ComputePipeline>(std::move(*pipeline));
-    else
+    auto specialized = CachedSpirv(CacheFolder("specialized"), key + ".spv",
+                                   [&] { return shading::SpecializeCompute(kernel->spirv, specialization); });
+    if (times) times->specialize_ms = MsSince(t0);
+    if (!specialized) {
+      slot->error = specialized.failure();
+      return;
+    }
+    const auto t1 = Clock::now();
+    vk::Context& context = *device.context;
+    const auto folder = CacheFolder("pipelines");
+    const std::string file = DeviceKey(context.device()) + "-" + key + ".bin";
+    std::size_t loaded_bytes = 0;
+    auto cache = LoadPipelineCache(context, folder ? std::optional(*folder / file) : std::nullopt, &loaded_bytes);
+    // The constants are frozen into the module: no specialization info.
+    auto pipeline = context.CreatePipeline(*specialized, {}, bindings, push_bytes, cache ? cache->get() : nullptr);
+    if (times) times->pipeline_ms = MsSince(t1);
+    if (!pipeline) {
       slot->error = pipeline.failure();
-    if (pipeline_ms) *pipeline_ms = MsSince(t0);
+      return;
+    }
+    slot->pipeline = std::shared_ptr<vk::ComputePipeline>(std::move(*pipeline));
+    // A driver that keeps nothing (lavapipe: the bare 32-byte header) gets no file.
+    if (cache && folder)
+      if (auto data = context.PipelineCacheData(**cache); data && data->size() > 32 && data->size() != loaded_bytes)
+        WriteTrimmed(*folder, file, "vulkan-pipeline-cache", *data);
   });
   if (!slot->pipeline) return slot->error;
   return slot->pipeline;

@@ -1,8 +1,9 @@
-// What the renderers of one process share: the kernel's SPIR-V per variant
-// text, and Vulkan devices with their compiled compute pipelines. Creating a
-// pipeline is where lavapipe runs LLVM (350-800 ms), most of a short
-// experiment job, and jobs that differ only in parameters (push constants) or
-// material values compile the same pipeline.
+// What the renderers of one process share, and what later processes find on
+// disk (kernel_disk_cache.h): the kernel's SPIR-V per variant text, its
+// specialization per pipeline, and Vulkan devices with their compiled compute
+// pipelines. Pipeline creation is most of a short job's start-up (lavapipe:
+// SPIR-V -> NIR -> LLVM), and jobs that differ only in parameters (push
+// constants) or material values use the same pipeline.
 #pragma once
 
 #include <cstdint>
@@ -22,8 +23,12 @@ namespace shimmer::render {
 // without the SG-light integral (`sg_light`: the scene has an SG light).
 // `user_file` names the user's file in compile errors. `compile_ms` is set
 // when this call compiled (0 when cached).
-Result<std::shared_ptr<const shading::Spirv>> KernelSpirv(const std::string& user_text, const std::string& user_file,
-                                                          bool sg_light, double* compile_ms);
+struct KernelModule {
+  shading::Spirv spirv;
+  std::string key;  // shading::CompileKey of its sources
+};
+Result<std::shared_ptr<const KernelModule>> KernelSpirv(const std::string& user_text, const std::string& user_file,
+                                                        bool sg_light, double* compile_ms);
 
 // A device shared by every renderer asking for the same options, created on
 // first use and never destroyed: tearing Vulkan down from static destructors
@@ -36,14 +41,21 @@ struct DeviceHandle {
 };
 Result<DeviceHandle> AcquireDevice(const vk::ContextOptions& options);
 
-// The pipeline of `spirv` with `specialization` on `device`, compiled by the
+// The pipeline of `kernel` with `specialization` on `device`, made by the
 // first renderer that needs it while others needing it wait; renderers
-// needing other pipelines go on meanwhile. `pipeline_ms` is set by the call
-// that compiled.
+// needing other pipelines go on meanwhile. The module is specialized before
+// the driver sees it (shading::SpecializeCompute); the specialized module,
+// and the driver's pipeline cache where it keeps one (lavapipe does not),
+// are kept on disk. The call that made the pipeline sets the times.
+struct PipelineTimes {
+  double specialize_ms = 0;  // specializing, or reading the specialized module from disk
+  double pipeline_ms = 0;    // vkCreateComputePipelines
+};
 Result<std::shared_ptr<vk::ComputePipeline>> AcquirePipeline(const DeviceHandle& device,
-                                                             const std::shared_ptr<const shading::Spirv>& spirv,
+                                                             const std::shared_ptr<const KernelModule>& kernel,
                                                              std::span<const std::int32_t> specialization,
                                                              std::span<const vk::BufferKind> bindings,
-                                                             std::uint32_t push_bytes, double* pipeline_ms);
+                                                             std::uint32_t push_bytes, PipelineTimes* times,
+                                                             bool driver_specializes = false);
 
 }  // namespace shimmer::render

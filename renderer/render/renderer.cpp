@@ -205,6 +205,7 @@ shading::CameraDesc Renderer::camera(int frame) const {
 
 Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& settings) {
   using R = Result<std::unique_ptr<Renderer>>;
+  const auto t_start = Clock::now();
   if (Status s = ValidateNumbers(settings); !s) return s.failure();
   const testing::TestHooks hooks = testing::CurrentTestHooks();
   std::unique_ptr<Renderer> r(new Renderer());
@@ -246,7 +247,11 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
                                im.variant.reference ? 1 : 0};
   using vk::BufferKind;
   const BufferKind kinds[] = {BufferKind::kUniform, BufferKind::kStorage, BufferKind::kStorage, BufferKind::kStorage};
-  auto pipeline = AcquirePipeline(*device, *spirv, spec, kinds, sizeof(gpu::Push), &im.timings.pipeline_ms);
+  PipelineTimes pipeline_times;
+  auto pipeline =
+      AcquirePipeline(*device, *spirv, spec, kinds, sizeof(gpu::Push), &pipeline_times, hooks.driver_specializes);
+  im.timings.specialize_ms = pipeline_times.specialize_ms;
+  im.timings.pipeline_ms = pipeline_times.pipeline_ms;
   if (!pipeline) return pipeline.failure();
   im.pipeline = *pipeline;
 
@@ -282,6 +287,7 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
   double warm_ms = 0;
   if (Status s = im.Dispatch(gpu::Push{}, &warm_ms, 1, 1); !s) return s.failure();
   im.timings.jit_ms = MsSince(t2);
+  im.timings.startup_ms = MsSince(t_start);
   return r;
 }
 

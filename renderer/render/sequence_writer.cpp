@@ -144,7 +144,9 @@ SequenceFile Describe(const RenderSettings& settings, const Renderer& renderer) 
   seq.driver = renderer.device_driver();
   seq.revision = SourceRevision();
   seq.timings.shader_compile_ms = renderer.timings().compile_ms;
+  seq.timings.specialize_ms = renderer.timings().specialize_ms;
   seq.timings.pipeline_create_ms = renderer.timings().pipeline_ms;
+  seq.timings.startup_ms = renderer.timings().startup_ms;
   seq.timings.first_dispatch_jit_ms = renderer.timings().jit_ms;
   return seq;
 }

@@ -11,6 +11,9 @@ struct TestHooks {
   // Rows per dispatch (a multiple of 8), to test banding on small images.
   // 0: as many as the device's storage buffer range allows.
   int band_rows = 0;
+  // Hand the driver the whole kernel with specialization constants, as
+  // before shimmer specialized it itself: the test that both render alike.
+  bool driver_specializes = false;
 };
 
 class ScopedTestHooks {

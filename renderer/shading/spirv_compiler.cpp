@@ -4,7 +4,13 @@
 #include <glslang/Public/ShaderLang.h>
 #include <glslang/SPIRV/GlslangToSpv.h>
 
+#include <spirv-tools/libspirv.h>
+#include <spirv-tools/optimizer.hpp>
+
 #include <mutex>
+#include <unordered_map>
+
+#include "shimmer/core/content_hash.h"
 
 #include "shimmer/renderer/shading.h"
 
@@ -66,6 +72,50 @@ Result<Spirv> CompileCompute(const GlslFile& main, std::span<const GlslFile> ext
   if (words.empty())
     return Result<Spirv>::Failure(main.name + ": SPIR-V generation produced no code", ErrorCode::kInternal);
   return words;
+}
+
+std::string CompileKey(const GlslFile& main, std::span<const GlslFile> extra) {
+  const glslang::Version v = glslang::GetVersion();
+  std::string all = "glslang " + std::to_string(v.major) + "." + std::to_string(v.minor) + "." +
+                    std::to_string(v.patch) + v.flavor + '\0';
+  auto add = [&](std::string_view name, std::string_view text) {
+    all.append(name);
+    all += '\0';
+    all.append(text);
+    all += '\0';
+  };
+  add(main.name, main.text);
+  for (const GlslFile& f : extra) add(f.name, f.text);
+  for (const auto& [name, text] : GlslSources()) add(name, text);
+  return Fnv1a64Hex(all);
+}
+
+std::string SpecializerVersion() { return spvSoftwareVersionDetailsString(); }
+
+Result<Spirv> SpecializeCompute(const Spirv& module, std::span<const std::int32_t> constants) {
+  std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> values;
+  for (std::size_t i = 0; i < constants.size(); ++i)
+    values[static_cast<std::uint32_t>(i)] = {static_cast<std::uint32_t>(constants[i])};
+  spvtools::Optimizer optimizer(SPV_ENV_VULKAN_1_2);
+  std::string messages;
+  optimizer.SetMessageConsumer([&](spv_message_level_t level, const char*, const spv_position_t&, const char* text) {
+    if (level <= SPV_MSG_ERROR) messages += std::string(text) + "; ";
+  });
+  optimizer.RegisterPass(spvtools::CreateSetSpecConstantDefaultValuePass(values))
+      .RegisterPass(spvtools::CreateFreezeSpecConstantValuePass())
+      .RegisterPass(spvtools::CreateFoldSpecConstantOpAndCompositePass())
+      .RegisterPass(spvtools::CreateDeadBranchElimPass())
+      .RegisterPass(spvtools::CreateBlockMergePass())
+      .RegisterPass(spvtools::CreateEliminateDeadFunctionsPass())
+      .RegisterPass(spvtools::CreateAggressiveDCEPass());
+  // glslang's output is valid SPIR-V; validating it again would cost as much
+  // as the passes.
+  spvtools::OptimizerOptions options;
+  options.set_run_validator(false);
+  Spirv out;
+  if (!optimizer.Run(module.data(), module.size(), &out, options))
+    return Result<Spirv>::Failure("specializing the kernel failed: " + messages, ErrorCode::kInternal);
+  return out;
 }
 
 }  // namespace shimmer::shading

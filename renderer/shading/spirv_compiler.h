@@ -24,4 +24,20 @@ using Spirv = std::vector<std::uint32_t>;
 // error is glslang's log, whose lines start with "ERROR: <file>:<line>:".
 Result<Spirv> CompileCompute(const GlslFile& main, std::span<const GlslFile> extra = {});
 
+// A hash of everything CompileCompute(main, extra) reads: the texts, the
+// shading core it may include and the compiler's version. Equal keys, equal
+// SPIR-V: the name of a compiled module in a cache.
+std::string CompileKey(const GlslFile& main, std::span<const GlslFile> extra = {});
+
+// `module` with its int specialization constants 0..k-1 set to `constants`
+// and frozen, and the code they make unreachable removed (SPIRV-Tools:
+// freeze, fold, dead-branch and dead-function elimination, ADCE). The kernel
+// holds every variant, scene kind and NDF; a driver that compiles it whole
+// (lavapipe: SPIR-V -> NIR of every function before specializing) spends 4x
+// longer than on the one variant left here. Changes no arithmetic that
+// remains.
+Result<Spirv> SpecializeCompute(const Spirv& module, std::span<const std::int32_t> constants);
+// The optimizer's version, for cache keys of specialized modules.
+std::string SpecializerVersion();
+
 }  // namespace shimmer::shading

@@ -69,6 +69,16 @@ int ComputeQueueFamily(VkPhysicalDevice pd) {
   return -1;
 }
 
+std::string HexOf(const std::uint8_t* bytes, std::size_t n) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string out;
+  for (std::size_t i = 0; i < n; ++i) {
+    out += kDigits[bytes[i] >> 4];
+    out += kDigits[bytes[i] & 15];
+  }
+  return out;
+}
+
 DeviceInfo Describe(VkPhysicalDevice pd) {
   VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
   VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
@@ -87,6 +97,10 @@ DeviceInfo Describe(VkPhysicalDevice pd) {
                              (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT);
   info.max_storage_buffer_range = props.properties.limits.maxStorageBufferRange;
   info.max_uniform_buffer_range = props.properties.limits.maxUniformBufferRange;
+  info.vendor_id = props.properties.vendorID;
+  info.device_id = props.properties.deviceID;
+  info.driver_version = props.properties.driverVersion;
+  info.pipeline_cache_uuid = HexOf(props.properties.pipelineCacheUUID, VK_UUID_SIZE);
   int family = ComputeQueueFamily(pd);
   if (family >= 0) {
     std::uint32_t n = 0;
@@ -224,6 +238,34 @@ ComputePipeline::~ComputePipeline() {
   if (impl_->set_layout) vkDestroyDescriptorSetLayout(d, impl_->set_layout, nullptr);
   if (impl_->module) vkDestroyShaderModule(d, impl_->module, nullptr);
 }
+
+struct PipelineCache::Impl {
+  VkDevice device = VK_NULL_HANDLE;
+  VkPipelineCache cache = VK_NULL_HANDLE;
+};
+
+PipelineCache::~PipelineCache() {
+  if (impl_ && impl_->cache) vkDestroyPipelineCache(impl_->device, impl_->cache, nullptr);
+}
+
+namespace {
+
+// Why `data` is no cache of `info`'s device, or empty when its header fits.
+std::string ForeignCacheReason(std::string_view data, const DeviceInfo& info) {
+  VkPipelineCacheHeaderVersionOne header{};
+  if (data.size() < sizeof header)
+    return "truncated: " + std::to_string(data.size()) + " bytes, shorter than a cache header";
+  std::memcpy(&header, data.data(), sizeof header);
+  if (header.headerVersion != VK_PIPELINE_CACHE_HEADER_VERSION_ONE || header.headerSize < sizeof header ||
+      header.headerSize > data.size())
+    return "not a Vulkan pipeline cache";
+  if (header.vendorID != info.vendor_id || header.deviceID != info.device_id) return "written for another device";
+  if (HexOf(header.pipelineCacheUUID, VK_UUID_SIZE) != info.pipeline_cache_uuid)
+    return "written by another driver build";
+  return {};
+}
+
+}  // namespace
 
 struct Context::Impl {
   VkInstance instance = VK_NULL_HANDLE;
@@ -414,10 +456,43 @@ Result<std::unique_ptr<Buffer>> Context::CreateBuffer(std::size_t bytes, BufferK
   return buf;
 }
 
+Result<std::unique_ptr<PipelineCache>> Context::CreatePipelineCache(std::string_view data) {
+  using R = Result<std::unique_ptr<PipelineCache>>;
+  if (!data.empty())
+    if (std::string why = ForeignCacheReason(data, info_); !why.empty()) return R::Failure(why);
+  std::unique_ptr<PipelineCache> cache(new PipelineCache());
+  cache->impl_ = std::make_unique<PipelineCache::Impl>();
+  cache->impl_->device = impl_->device;
+  VkPipelineCacheCreateInfo ci{VK_STRUCTURE_TYPE_PIPELINE_CACHE_CREATE_INFO};
+  ci.initialDataSize = data.size();
+  ci.pInitialData = data.empty() ? nullptr : data.data();
+  if (VkResult r = vkCreatePipelineCache(impl_->device, &ci, nullptr, &cache->impl_->cache); r != VK_SUCCESS) {
+    cache->impl_->cache = VK_NULL_HANDLE;
+    return VulkanError("could not create a pipeline cache", r);
+  }
+  return cache;
+}
+
+Result<std::string> Context::PipelineCacheData(const PipelineCache& cache) {
+  // The size can grow between the two calls when another thread adds a
+  // pipeline; VK_INCOMPLETE then asks again.
+  for (;;) {
+    std::size_t size = 0;
+    if (VkResult r = vkGetPipelineCacheData(impl_->device, cache.impl_->cache, &size, nullptr); r != VK_SUCCESS)
+      return VulkanError("could not read the pipeline cache", r);
+    std::string data(size, '\0');
+    VkResult r = vkGetPipelineCacheData(impl_->device, cache.impl_->cache, &size, data.data());
+    if (r == VK_INCOMPLETE) continue;
+    if (r != VK_SUCCESS) return VulkanError("could not read the pipeline cache", r);
+    data.resize(size);
+    return data;
+  }
+}
+
 Result<std::unique_ptr<ComputePipeline>> Context::CreatePipeline(std::span<const std::uint32_t> spirv,
                                                                  std::span<const std::int32_t> specialization,
                                                                  std::span<const BufferKind> buffer_kinds,
-                                                                 std::uint32_t push_bytes) {
+                                                                 std::uint32_t push_bytes, PipelineCache* cache) {
   VkDevice d = impl_->device;
   std::unique_ptr<ComputePipeline> p(new ComputePipeline());
   p->impl_ = std::make_unique<ComputePipeline::Impl>();
@@ -463,7 +538,9 @@ Result<std::unique_ptr<ComputePipeline>> Context::CreatePipeline(std::span<const
   cpci.stage.pName = "main";
   cpci.stage.pSpecializationInfo = specialization.empty() ? nullptr : &si;
   cpci.layout = pi.layout;
-  if (VkResult r = vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpci, nullptr, &pi.pipeline); r != VK_SUCCESS)
+  if (VkResult r =
+          vkCreateComputePipelines(d, cache ? cache->impl_->cache : VK_NULL_HANDLE, 1, &cpci, nullptr, &pi.pipeline);
+      r != VK_SUCCESS)
     return fail("pipeline", r);
   const VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, buffer_count},
                                         {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, buffer_count}};

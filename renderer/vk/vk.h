@@ -9,6 +9,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "shimmer/core/result.h"
@@ -25,6 +26,12 @@ struct DeviceInfo {
   double timestamp_period_ns = 0;  // 0: no timestamps on the compute queue
   std::uint64_t max_storage_buffer_range = 0;
   std::uint64_t max_uniform_buffer_range = 0;
+  // What a pipeline cache's data is only valid for (Vulkan spec, "Pipeline
+  // Cache"): the same vendor, device and pipelineCacheUUID.
+  std::uint32_t vendor_id = 0;
+  std::uint32_t device_id = 0;
+  std::uint32_t driver_version = 0;
+  std::string pipeline_cache_uuid;  // 32 hex digits
 };
 
 // How a kernel reads a buffer. Uniform buffers suit small read-only data read
@@ -79,6 +86,21 @@ class ComputePipeline {
   std::unique_ptr<Impl> impl_;
 };
 
+// A VkPipelineCache: the driver's compiled pipelines as bytes that a later
+// process can hand back. Pipelines created through it add to it.
+class PipelineCache {
+ public:
+  ~PipelineCache();
+  PipelineCache(const PipelineCache&) = delete;
+  PipelineCache& operator=(const PipelineCache&) = delete;
+
+ private:
+  friend class Context;
+  PipelineCache() = default;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
 class Context {
  public:
   // Every Vulkan 1.2 device with a compute queue, as the loader lists them.
@@ -94,13 +116,22 @@ class Context {
   // The layer's warnings and errors since the last call, oldest first.
   std::vector<std::string> TakeValidationMessages();
 
+  // A pipeline cache seeded with `data` (empty: none). Data the driver would
+  // not accept, because it is truncated or was written by another vendor,
+  // device or driver build (its header says which), is refused with the
+  // reason, before the driver sees it: drivers need not survive bad data.
+  Result<std::unique_ptr<PipelineCache>> CreatePipelineCache(std::string_view data = {});
+  // The cache's contents, for CreatePipelineCache in a later process.
+  Result<std::string> PipelineCacheData(const PipelineCache& cache);
+
   Result<std::unique_ptr<Buffer>> CreateBuffer(std::size_t bytes, BufferKind kind = BufferKind::kStorage);
   // A compute pipeline over buffers of the given kinds at bindings 0..n-1,
-  // push constants of `push_bytes`, int specialization constants with ids 0..k-1.
+  // push constants of `push_bytes`, int specialization constants with ids
+  // 0..k-1; through `cache` when given (the driver synchronises its use).
   Result<std::unique_ptr<ComputePipeline>> CreatePipeline(std::span<const std::uint32_t> spirv,
                                                           std::span<const std::int32_t> specialization,
                                                           std::span<const BufferKind> bindings,
-                                                          std::uint32_t push_bytes);
+                                                          std::uint32_t push_bytes, PipelineCache* cache = nullptr);
   // Records, submits and waits for one dispatch of groups_x * groups_y
   // workgroups; returns its GPU milliseconds, from timestamps around the
   // dispatch (wall time when the queue has none). Thread-safe: dispatches

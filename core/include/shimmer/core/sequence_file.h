@@ -38,7 +38,8 @@ struct SequenceCamera {
 };
 
 struct SequenceTimings {
-  double shader_compile_ms = 0, pipeline_create_ms = 0, first_dispatch_jit_ms = 0;
+  double shader_compile_ms = 0, specialize_ms = 0, pipeline_create_ms = 0, first_dispatch_jit_ms = 0;
+  double startup_ms = 0;  // the renderer's whole start-up, the above included
   double render_wall_ms = 0, readback_ms = 0, exr_write_ms = 0;
 };
 

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "shimmer/core/content_hash.h"
 #include "shimmer/experiments/spec.h"
 
 namespace shimmer::experiments {
@@ -72,6 +73,6 @@ std::string CoreVersionOf(std::span<const std::pair<std::string_view, std::strin
 bool ParseShard(const std::string& text, int* index, int* count);
 std::vector<Job> ShardOf(const std::vector<Job>& jobs, int index, int count);
 
-std::string Fnv1a64Hex(std::string_view text);
+using shimmer::Fnv1a64Hex;  // job ids are FNV-1a hashes of canonical JSON
 
 }  // namespace shimmer::experiments

@@ -104,10 +104,15 @@ struct Frame {
   }
 };
 
+// Where a renderer's start-up went. A step done earlier in the process (the
+// kernel, a pipeline another renderer made) counts 0; one found in the
+// on-disk kernel cache counts the time to read it.
 struct Timings {
-  double compile_ms = 0;   // GLSL -> SPIR-V (0 when cached in this process)
-  double pipeline_ms = 0;  // vkCreateComputePipelines
-  double jit_ms = 0;       // first (warm-up) dispatch: lavapipe's LLVM JIT
+  double compile_ms = 0;     // GLSL -> SPIR-V
+  double specialize_ms = 0;  // freezing the specialization constants into the module
+  double pipeline_ms = 0;    // vkCreateComputePipelines
+  double jit_ms = 0;         // first (warm-up) dispatch: lavapipe's LLVM JIT
+  double startup_ms = 0;     // all of Renderer::Create: from the settings to a renderer ready for frame 0
 };
 
 // Resolved from RenderSettings; describes what is rendered.

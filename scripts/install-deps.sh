@@ -7,11 +7,12 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libvulkan-dev mesa-vulkan-drivers vulkan-tools vulkan-validationlayers
   glslang-dev glslang-tools spirv-tools
-  libopencv-dev libopenexr-dev openexr
+  libopencv-dev libopenexr-dev openexr libdeflate-dev
   libceres-dev libeigen3-dev
   libcli11-dev nlohmann-json3-dev libsqlite3-dev libglm-dev
   libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
   gnuplot-nox chromium
+  slurm-wlm munge sqlite3
 )
 
 missing=()

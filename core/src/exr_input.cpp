@@ -10,11 +10,13 @@
 #include <cstring>
 #include <fstream>
 #include <mutex>
+#include <new>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include "imf_threads.h"
+#include "zip_chunk.h"
 
 namespace shimmer {
 
@@ -103,6 +105,37 @@ Status ReadWithImf(const fs::path& file, int part, const ExrPartInfo& info,
   return Done{};
 }
 
+// The pipeline's decompress step for ZIP/ZIPS chunks, in place of OpenEXR's
+// default_decompress_chunk (src/lib/OpenEXRCore/decoding.c), whose cases
+// before inflating it repeats: an empty chunk, and one stored raw because
+// compressing did not make it smaller.
+exr_result_t InflateZipChunk(exr_decode_pipeline_t* pipeline) {
+  const exr_chunk_info_t& chunk = pipeline->chunk;
+  if (chunk.packed_size == 0) return EXR_ERR_SUCCESS;
+  if (chunk.packed_size == chunk.unpacked_size) {
+    if (pipeline->unpacked_buffer != pipeline->packed_buffer)
+      std::memcpy(pipeline->unpacked_buffer, pipeline->packed_buffer, chunk.unpacked_size);
+    return EXR_ERR_SUCCESS;
+  }
+  auto* context = static_cast<ExrInput::Context*>(pipeline->decoding_user_data);
+  try {
+    // One per thread, kept: its inflater's tables and scratch buffer are
+    // then allocated (and their pages faulted in) once, not once per read.
+    thread_local detail::ZipChunkDecoder decoder;
+    Status s =
+        decoder.Decode(pipeline->packed_buffer, chunk.packed_size, pipeline->unpacked_buffer, chunk.unpacked_size);
+    if (s) return EXR_ERR_SUCCESS;
+    const std::string where = chunk.type == EXR_STORAGE_TILED
+                                  ? "tile " + std::to_string(chunk.start_x) + "," + std::to_string(chunk.start_y)
+                                  : "scanline " + std::to_string(chunk.start_y);
+    context->Record(("ZIP chunk at " + where + ": " + s.error()).c_str());
+    return EXR_ERR_CORRUPT_CHUNK;
+  } catch (const std::bad_alloc&) {
+    // Not through OpenEXR's C frames: they would leak the pipeline's buffers.
+    return EXR_ERR_OUT_OF_MEMORY;
+  }
+}
+
 }  // namespace
 
 Result<ExrInput> ExrInput::Open(const fs::path& file, bool whole_file) {
@@ -171,7 +204,7 @@ Result<ExrInput> ExrInput::Open(const fs::path& file, bool whole_file) {
   return input;
 }
 
-Status ExrInput::Read(int part, const std::vector<ExrPlaneRequest>& requests) const {
+Status ExrInput::Read(int part, const std::vector<ExrPlaneRequest>& requests, ExrZipInflater inflater) const {
   Context& context = *context_;
   exr_context_t exr = context.exr;
   const ExrPartInfo& info = parts_.at(part);
@@ -192,6 +225,8 @@ Status ExrInput::Read(int part, const std::vector<ExrPlaneRequest>& requests) co
   exr_storage_t storage = EXR_STORAGE_SCANLINE;
   exr_get_storage(exr, part, &storage);
   const bool tiled = storage == EXR_STORAGE_TILED;
+  const bool libdeflate = inflater == ExrZipInflater::kLibdeflate && !info.deep &&
+                          (compression == EXR_COMPRESSION_ZIP || compression == EXR_COMPRESSION_ZIPS);
   int32_t block_w = width, block_h = 1;
   exr_result_t rv = tiled ? exr_get_tile_sizes(exr, part, 0, 0, &block_w, &block_h)
                           : exr_get_scanlines_per_chunk(exr, part, &block_h);
@@ -243,6 +278,10 @@ Status ExrInput::Read(int part, const std::vector<ExrPlaneRequest>& requests) co
           channel.user_bytes_per_element = sizeof(float);
         }
         r = exr_decoding_choose_default_routines(exr, part, &pipeline);
+        if (r == EXR_ERR_SUCCESS && libdeflate && pipeline.decompress_fn) {
+          pipeline.decompress_fn = InflateZipChunk;
+          pipeline.decoding_user_data = &context;
+        }
       }
       if (r == EXR_ERR_SUCCESS) r = exr_decoding_run(exr, part, &pipeline);
       if (r != EXR_ERR_SUCCESS) {

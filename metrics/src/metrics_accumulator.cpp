@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pixel_row.h"
 #include "shimmer/metrics/energy_bias.h"
 #include "shimmer/metrics/temporal_sensitivity.h"
 
@@ -13,7 +14,7 @@ namespace {
 // relMSE's denominator offset: keeps near-black reference pixels from
 // dominating (the convention of the rendering literature's relMSE, e.g.
 // Rousselle et al. 2011, with 0.01 as docs/metrics.md defines it).
-constexpr double kRelMseEpsilon = 0.01;
+using detail::kRelMseEpsilon;
 
 // Per (frame block, region pixel): sum (T - t0), sum (R - r0), the squares of
 // those and of (E - e0), and sum E^2 / (R^2 + eps).
@@ -102,73 +103,73 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
   const bool has_previous = frames_added_ > 0;
   std::vector<RowSums> rows(height);
   cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& range) {
+    std::vector<double> row_terms(4 * static_cast<size_t>(width));
+    std::vector<uint8_t> updated(width);
     for (int y = range.start; y < range.end; ++y) {
+      const size_t row = static_cast<size_t>(y) * width;
       const float* tv_row = T.ptr<float>(y);
       const float* rv_row = has_ref ? Rf.ptr<float>(y) : nullptr;
-      const float* tp_row = has_previous ? previous_test_.ptr<float>(y) : nullptr;
-      const float* rp_row = has_previous && has_ref ? previous_ref_.ptr<float>(y) : nullptr;
-      const float* se_row = with_stderr ? reference_stderr.ptr<float>(y) : nullptr;
-      const uint8_t* in = setup_.region.ptr<uint8_t>(y);
-      uint8_t* bad = excluded_.ptr<uint8_t>(y);
-      float* sig = signal_frame_.ptr<float>(y);
-      double* dt = diff_test_.ptr<double>(y);
-      double* de = has_ref ? diff_err_.ptr<double>(y) : nullptr;
+      const detail::PixelRowInput in{
+          .width = width,
+          .test = tv_row,
+          .reference = rv_row,
+          .previous_test = has_previous ? previous_test_.ptr<float>(y) : nullptr,
+          .previous_reference = has_previous && has_ref ? previous_ref_.ptr<float>(y) : nullptr,
+          .region = setup_.region.ptr<uint8_t>(y),
+          .signal_error = setup_.signal == FlickerSignal::kError};
+      detail::PixelRowState state{.excluded = excluded_.ptr<uint8_t>(y),
+                                  .test = moments_test_.At(row),
+                                  .reference = has_ref ? moments_ref_.At(row) : TemporalMoments::Span{},
+                                  .error = has_ref ? moments_err_.At(row) : TemporalMoments::Span{},
+                                  .diff_test = diff_test_.ptr<double>(y),
+                                  .diff_error = has_ref ? diff_err_.ptr<double>(y) : nullptr,
+                                  .signal = signal_frame_.ptr<float>(y)};
+      detail::PixelRowTerms terms{.test = row_terms.data(),
+                                  .reference = row_terms.data() + width,
+                                  .error2 = row_terms.data() + 2 * width,
+                                  .relative2 = row_terms.data() + 3 * width,
+                                  .updated = updated.data()};
+      detail::UpdatePixelRow(in, state, terms);
       RowSums sums;
+      // In pixel order, as always: the sums' last bits depend on it.
       for (int x = 0; x < width; ++x) {
-        if (!in[x]) continue;
-        const size_t i = static_cast<size_t>(y) * width + x;
-        const double tv = tv_row[x], rv = has_ref ? rv_row[x] : 0.0;
-        if (!std::isfinite(tv) || !std::isfinite(rv)) {
-          // Excluded and counted, never propagated: one NaN would otherwise
-          // turn every mean and the whole spectrum into NaN.
-          ++sums.non_finite;
-          bad[x] = 1;
-          sig[x] = 0;
-          continue;
-        }
-        const double e = tv - rv;
-        sums.test += tv;
-        sums.reference += rv;
-        sums.error2 += e * e;
-        sums.relative2 += e * e / (rv * rv + kRelMseEpsilon);
-        ++sums.samples;
-        if (bad[x]) {
-          sig[x] = 0;
-          continue;
-        }
-        moments_test_.Add(i, tv);
-        if (has_ref) {
-          moments_ref_.Add(i, rv);
-          moments_err_.Add(i, e);
-          const int p = region_index_[i];
-          if (frames_added_ == 0) {
-            shifts_[2 * p] = static_cast<float>(tv);
-            shifts_[2 * p + 1] = static_cast<float>(rv);
-          }
-          const double dt = tv - shifts_[2 * p], dr = rv - shifts_[2 * p + 1], de = dt - dr;
-          const double denominator = rv * rv + kRelMseEpsilon;
-          float* cell = block_cells + static_cast<size_t>(p) * kCellSums;
-          cell[0] += static_cast<float>(dt);
-          cell[1] += static_cast<float>(dr);
-          cell[2] += static_cast<float>(dt * dt);
-          cell[3] += static_cast<float>(dr * dr);
-          cell[4] += static_cast<float>(de * de);
-          cell[5] += static_cast<float>(e * e / denominator);
-          if (se_row && std::isfinite(se_row[x])) {
-            const double s2 = double(se_row[x]) * se_row[x];
-            noise_[p] += s2;
-            // d/dR of E^2 / (R^2 + eps), with E = T - R (the delta method).
-            const double slope = -2 * e / denominator - 2 * rv * e * e / (denominator * denominator);
-            relmse_noise_[p] += slope * slope * s2;
-          }
-        }
-        if (tp_row) {
-          dt[x] += std::abs(tv - tp_row[x]);
-          if (has_ref) de[x] += std::abs(e - (static_cast<double>(tp_row[x]) - rp_row[x]));
-        }
-        sig[x] = static_cast<float>(setup_.signal == FlickerSignal::kError ? e : tv);
+        sums.test += terms.test[x];
+        sums.reference += terms.reference[x];
+        sums.error2 += terms.error2[x];
+        sums.relative2 += terms.relative2[x];
       }
+      sums.samples = terms.samples;
+      sums.non_finite = terms.non_finite;
       rows[y] = sums;
+      if (!has_ref) continue;
+      const float* se_row = with_stderr ? reference_stderr.ptr<float>(y) : nullptr;
+      for (int x = 0; x < width; ++x) {
+        if (!updated[x]) continue;
+        const size_t i = row + x;
+        const double tv = tv_row[x], rv = rv_row[x];
+        const double e = tv - rv;
+        const int p = region_index_[i];
+        if (frames_added_ == 0) {
+          shifts_[2 * p] = static_cast<float>(tv);
+          shifts_[2 * p + 1] = static_cast<float>(rv);
+        }
+        const double dt = tv - shifts_[2 * p], dr = rv - shifts_[2 * p + 1], de = dt - dr;
+        const double denominator = rv * rv + kRelMseEpsilon;
+        float* cell = block_cells + static_cast<size_t>(p) * kCellSums;
+        cell[0] += static_cast<float>(dt);
+        cell[1] += static_cast<float>(dr);
+        cell[2] += static_cast<float>(dt * dt);
+        cell[3] += static_cast<float>(dr * dr);
+        cell[4] += static_cast<float>(de * de);
+        cell[5] += static_cast<float>(terms.relative2[x]);  // e^2 / denominator
+        if (se_row && std::isfinite(se_row[x])) {
+          const double s2 = double(se_row[x]) * se_row[x];
+          noise_[p] += s2;
+          // d/dR of E^2 / (R^2 + eps), with E = T - R (the delta method).
+          const double slope = -2 * e / denominator - 2 * rv * e * e / (denominator * denominator);
+          relmse_noise_[p] += slope * slope * s2;
+        }
+      }
     }
   });
 

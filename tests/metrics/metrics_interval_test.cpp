@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <random>
 
+#include <opencv2/core.hpp>
+
 #include "shimmer/metrics/metrics_accumulator.h"
 #include "shimmer/metrics/metrics_report.h"
 #include "test_sequences.h"
@@ -182,6 +184,45 @@ TEST(MetricsIntervals, SufficientStatisticsReproduceThePassMetrics) {
   for (double v : test[0]) m0 += v / 8;
   for (double v : test[0]) v0 += (v - m0) * (v - m0) / 7;
   EXPECT_NEAR(only0.tv_test, v0, 1e-5 * v0);
+}
+
+// The replicates run in parallel batches; the intervals must not depend on
+// how many threads there are, nor on where batches end (the tile count and
+// the replicate count here are not multiples of anything).
+TEST(MetricsIntervals, BootstrapGivesTheSameIntervalsOnAnyNumberOfThreads) {
+  const std::vector<int> blocks = {3, 3, 3, 2};
+  TileBlockStatistics cells(blocks);
+  std::mt19937 random(11);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  std::vector<float> sums(6 * blocks.size());
+  for (int tile = 0; tile < 1237; ++tile) {
+    const int index = cells.AddTile();
+    for (int pixel = 0; pixel < 3; ++pixel) {
+      for (float& v : sums) v = u(random);
+      const size_t k = blocks.size();
+      cells.AddPixel(index, u(random), 1 + u(random), &sums[0], &sums[k], &sums[2 * k], &sums[3 * k], &sums[4 * k],
+                     &sums[5 * k], u(random), 1);
+    }
+  }
+  const TileBlockStatistics::Estimates point = cells.Evaluate({}, {});
+  const BootstrapSettings settings{.replicates = 203};
+  const int threads = cv::getNumThreads();
+  std::vector<TileBlockStatistics::Intervals> runs;
+  for (int n : {1, 2, 3, 8}) {
+    cv::setNumThreads(n);
+    runs.push_back(cells.Bootstrap(point, settings));
+  }
+  cv::setNumThreads(threads);
+  for (const auto& run : runs) {
+    for (auto member : {&TileBlockStatistics::Intervals::tv_err, &TileBlockStatistics::Intervals::tv_ratio,
+                        &TileBlockStatistics::Intervals::energy_bias, &TileBlockStatistics::Intervals::relmse,
+                        &TileBlockStatistics::Intervals::flicker_index}) {
+      ASSERT_TRUE(run.*member && runs[0].*member);
+      EXPECT_EQ((run.*member)->lo, (runs[0].*member)->lo);
+      EXPECT_EQ((run.*member)->hi, (runs[0].*member)->hi);
+      EXPECT_LT((run.*member)->lo, (run.*member)->hi);
+    }
+  }
 }
 
 // A reference with stderr.Y = s, its frames R0 + s n_t, and a test R0 +

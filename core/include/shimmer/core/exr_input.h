@@ -37,6 +37,11 @@ struct ExrPlaneRequest {
   float* plane = nullptr;
 };
 
+// What inflates ZIP and ZIPS chunks: libdeflate (several times faster than
+// zlib; the reconstruction after it is OpenEXR's, byte for byte), or
+// OpenEXR's own zlib path, kept to compare against in tests and benchmarks.
+enum class ExrZipInflater { kLibdeflate, kOpenExr };
+
 class ExrInput {
  public:
   // Reads the headers; fails with a message naming the file. With
@@ -50,7 +55,9 @@ class ExrInput {
 
   // Decodes the requested channels of one part (level 0 of a tiled part).
   // Chunks are decoded in parallel. Half and uint channels become float.
-  Status Read(int part, const std::vector<ExrPlaneRequest>& requests) const;
+  // Other compressions than ZIP/ZIPS always take OpenEXR's own decoders.
+  Status Read(int part, const std::vector<ExrPlaneRequest>& requests,
+              ExrZipInflater inflater = ExrZipInflater::kLibdeflate) const;
 
   struct Context;  // the open file and OpenEXR's error text
 

@@ -16,6 +16,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "shimmer/metrics/huge_page_allocator.h"
+
 namespace shimmer::metrics {
 
 // w[n] = 0.5 - 0.5 cos(2 pi n / L), n = 0..L-1 (scipy's get_window('hann', L)).
@@ -63,8 +65,8 @@ class FlickerSpectrum {
   int step_;
   double fs_;
   std::vector<double> window_;
-  double density_scale_;     // 1 / (fs sum w^2)
-  std::vector<float> ring_;  // slot (t mod L) holds frame t, P floats
+  double density_scale_;        // 1 / (fs sum w^2)
+  HugePageVector<float> ring_;  // slot (t mod L) holds frame t, P floats
   int frames_ = 0;
   int segments_ = 0;
   std::vector<double> psd_sum_;  // sum over segments of pixel-mean densities

@@ -68,7 +68,8 @@ class MetricsAccumulator {
   std::vector<int> region_index_;  // row-major pixel -> index in region_indices_, -1 outside
   int block_length_ = 0;
   std::vector<int> block_frames_;
-  std::vector<float> cells_, shifts_;  // shifts_: (t0, r0) per region pixel
+  HugePageVector<float> cells_;
+  std::vector<float> shifts_;  // (t0, r0) per region pixel
   // Per region pixel, with stderr.Y: sum_t s^2, and sum_t (d relmse term / dR)^2 s^2.
   std::vector<double> noise_, relmse_noise_;
   int stderr_frames_ = 0;

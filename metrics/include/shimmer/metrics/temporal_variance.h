@@ -6,6 +6,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "shimmer/metrics/huge_page_allocator.h"
+
 namespace shimmer::metrics {
 
 // Running moments for every pixel of a W x H frame, in double.
@@ -32,6 +34,14 @@ class TemporalMoments {
     m2_[i] += delta * (x - mean_[i]);
   }
 
+  // The moments of pixels i, i+1, ... for code that updates a row of them at
+  // once (pixel_row.h) with exactly Add's arithmetic.
+  struct Span {
+    std::uint32_t* count;
+    double *mean, *m2;
+  };
+  Span At(size_t i) { return {count_.data() + i, mean_.data() + i, m2_.data() + i}; }
+
   // Folds in moments accumulated over other frames of the same pixels (Chan).
   void Merge(const TemporalMoments& other);
 
@@ -45,8 +55,8 @@ class TemporalMoments {
 
  private:
   int width_ = 0, height_ = 0;
-  std::vector<std::uint32_t> count_;
-  std::vector<double> mean_, m2_;
+  HugePageVector<std::uint32_t> count_;
+  HugePageVector<double> mean_, m2_;
 };
 
 }  // namespace shimmer::metrics

@@ -91,5 +91,6 @@ void AddReportCommand(CLI::App& app);
 void AddFitCommand(CLI::App& app);
 void AddExportBlenderCommand(CLI::App& app);
 void AddSgAccuracyCommand(CLI::App& app);
+void AddSceneCommand(CLI::App& app);
 
 }  // namespace shimmer::cli

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   shimmer::cli::AddFitCommand(app);
   shimmer::cli::AddExportBlenderCommand(app);
   shimmer::cli::AddSgAccuracyCommand(app);
+  shimmer::cli::AddSceneCommand(app);
   using shimmer::cli::kExitBadInput;
   using shimmer::cli::kExitFailure;
   try {

@@ -125,11 +125,13 @@ Scene BumpyPlaneScene() {
 }
 
 // Reads the optional fields of one JSON object; the first problem is kept,
-// worded with the object's place in the file ("scene.json: primitives[2]:
-// 'radius' must be a number > 0").
+// worded with the file and the JSON Pointer (RFC 6901) of the key or object
+// it is about: "scene.json: /primitives/2/radius: must be a number > 0".
 class FieldReader {
  public:
-  FieldReader(const nlohmann::json& object, std::string where) : j_(object), where_(std::move(where)) {}
+  // `pointer`: the object's JSON Pointer, "" for the top level.
+  FieldReader(const nlohmann::json& object, std::string source, std::string pointer)
+      : j_(object), source_(std::move(source)), pointer_(std::move(pointer)) {}
 
   // `allowed`: every key the object may have; another is reported (a typo
   // would otherwise be ignored silently).
@@ -140,24 +142,24 @@ class FieldReader {
       if (!known) {
         std::string list;
         for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-        Fail("unknown key '" + key + "' (expected: " + list + ")");
+        FailKey(key, "unknown key (expected: " + list + ")");
         break;
       }
     }
     return *this;
   }
   FieldReader& Require(const char* key) {
-    if (!j_.contains(key)) Fail("'" + std::string(key) + "' is required");
+    if (!j_.contains(key)) FailKey(key, "is required");
     return *this;
   }
   FieldReader& Vec3(const char* key, glm::dvec3* out) {
     if (!ok() || !j_.contains(key)) return *this;
     const auto& v = j_[key];
     if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
-      return Fail("'" + std::string(key) + "' must be an array of 3 numbers");
+      return FailKey(key, "must be an array of 3 numbers");
     const glm::dvec3 x{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
     if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z) || glm::length(x) > kMaxCoordinate)
-      return Fail("'" + std::string(key) + "' must be finite, at most 1e6 from the origin");
+      return FailKey(key, "must be finite, at most 1e6 from the origin");
     *out = x;
     return *this;
   }
@@ -170,27 +172,41 @@ class FieldReader {
       std::string range =
           open_lo && lo == 0 ? "> 0" : (open_lo ? "in (" : "in [") + NumberText(lo) + ", " + NumberText(hi) + "]";
       if (open_lo && lo == 0) range += " and <= " + NumberText(hi);
-      return Fail("'" + std::string(key) + "' must be a number " + range);
+      return FailKey(key, "must be a number " + range);
     }
     *out = x;
     return *this;
   }
   FieldReader& String(const char* key, std::string* out) {
     if (!ok() || !j_.contains(key)) return *this;
-    if (!j_[key].is_string()) return Fail("'" + std::string(key) + "' must be a string");
+    if (!j_[key].is_string()) return FailKey(key, "must be a string");
     *out = j_[key].get<std::string>();
     return *this;
   }
-  FieldReader& Fail(const std::string& problem) {
-    if (error_.empty()) error_ = where_ + ": " + problem;
-    return *this;
+  // A problem with the value of `key`.
+  FieldReader& FailKey(const std::string& key, const std::string& problem) {
+    return FailAt(pointer_ + "/" + PointerToken(key), problem);
   }
+  // A problem with the object as a whole.
+  FieldReader& Fail(const std::string& problem) { return FailAt(pointer_.empty() ? "/" : pointer_, problem); }
   bool ok() const { return error_.empty(); }
   const std::string& error() const { return error_; }
 
+  // RFC 6901 escaping of one reference token: "~" -> "~0", "/" -> "~1".
+  static std::string PointerToken(const std::string& key) {
+    std::string out;
+    for (char c : key) out += c == '~' ? "~0" : (c == '/' ? "~1" : std::string(1, c));
+    return out;
+  }
+
  private:
+  FieldReader& FailAt(const std::string& pointer, const std::string& problem) {
+    if (error_.empty()) error_ = source_ + ": " + pointer + ": " + problem;
+    return *this;
+  }
+
   const nlohmann::json& j_;
-  std::string where_;
+  std::string source_, pointer_;
   std::string error_;
 };
 
@@ -340,25 +356,26 @@ Result<Scene> ParseSceneJson(std::string_view text, const std::string& source) {
 
 Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) {
   using R = Result<Scene>;
-  if (!j.is_object()) return R::Failure(source + ": a scene is a JSON object");
+  if (!j.is_object()) return R::Failure(source + ": /: a scene is a JSON object");
   Scene s;
   s.name = source;
-  FieldReader top(j, source);
+  FieldReader top(j, source, "");
   top.Keys({"name", "primitives", "light", "material", "camera"}).String("name", &s.name).Require("primitives");
   if (!top.ok()) return R::Failure(top.error());
   const auto& prims = j["primitives"];
-  if (!prims.is_array() || prims.empty()) return R::Failure(source + ": 'primitives' must be a non-empty array");
+  if (!prims.is_array() || prims.empty()) return R::Failure(source + ": /primitives: must be a non-empty array");
   if (prims.size() > kMaxPrimitives)
-    return R::Failure(source + ": " + std::to_string(prims.size()) + " primitives; at most " +
+    return R::Failure(source + ": /primitives: " + std::to_string(prims.size()) + " primitives; at most " +
                       std::to_string(kMaxPrimitives) + " are supported");
   int index = 0;
   for (const auto& pj : prims) {
-    const std::string where = source + ": primitives[" + std::to_string(index++) + "]";
-    if (!pj.is_object() || !pj.contains("type") || !pj["type"].is_string())
-      return R::Failure(where + ": needs a 'type' (sphere, capsule, plane)");
-    const std::string type = pj["type"];
+    const std::string pointer = "/primitives/" + std::to_string(index++);
+    if (!pj.is_object()) return R::Failure(source + ": " + pointer + ": must be an object with a 'type'");
+    FieldReader r(pj, source, pointer);
+    std::string type;
+    r.Require("type").String("type", &type);
+    if (!r.ok()) return R::Failure(r.error());
     Primitive p;
-    FieldReader r(pj, where);
     if (type == "sphere") {
       p.type = Primitive::Type::kSphere;
       r.Keys({"type", "center", "radius"}).Require("center");
@@ -368,7 +385,7 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
       p.radius = 0.02;
       r.Keys({"type", "a", "b", "radius"}).Require("a").Require("b");
       r.Vec3("a", &p.a).Vec3("b", &p.b).Number("radius", &p.radius, 0, kMaxCoordinate, true);
-      if (r.ok() && glm::length(p.b - p.a) < 1e-9) r.Fail("capsule ends 'a' and 'b' coincide");
+      if (r.ok() && glm::length(p.b - p.a) < 1e-9) r.FailKey("b", "coincides with 'a': a capsule needs two ends");
     } else if (type == "plane") {
       p.type = Primitive::Type::kPlane;
       p.radius = 0;
@@ -376,25 +393,25 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
       r.Number("height", &p.radius, -kMaxCoordinate, kMaxCoordinate)
           .Number("bump_slope", &p.bump_slope, 0, 10)
           .Number("bump_frequency", &p.bump_frequency, 0, 1e4);
-      if (r.ok() && p.bump_slope > 0 && p.bump_frequency <= 0) r.Fail("'bump_slope' needs a positive 'bump_frequency'");
+      if (r.ok() && p.bump_slope > 0 && p.bump_frequency <= 0)
+        r.FailKey("bump_frequency", "must be > 0 when 'bump_slope' is");
     } else {
-      return R::Failure(where + ": unknown type '" + type + "' (sphere, capsule, plane)");
+      r.FailKey("type", "unknown type '" + type + "' (sphere, capsule, plane)");
     }
     if (!r.ok()) return R::Failure(r.error());
     s.primitives.push_back(p);
   }
   if (j.contains("light")) {
     const auto& lj = j["light"];
-    const std::string where = source + ": light";
-    if (!lj.is_object()) return R::Failure(where + ": must be an object");
+    if (!lj.is_object()) return R::Failure(source + ": /light: must be an object");
     std::string type = "directional";
-    FieldReader r(lj, where);
+    FieldReader r(lj, source, "/light");
     r.String("type", &type);
     if (r.ok() && type == "directional") {
       glm::dvec3 dir{0, 1, 0}, rad{1, 1, 1};
       r.Keys({"type", "direction", "irradiance"}).Vec3("direction", &dir).Vec3("irradiance", &rad);
-      if (r.ok() && glm::length(dir) < 1e-9) r.Fail("'direction' must not be zero");
-      if (r.ok() && glm::any(glm::lessThan(rad, glm::dvec3(0)))) r.Fail("'irradiance' must be >= 0");
+      if (r.ok() && glm::length(dir) < 1e-9) r.FailKey("direction", "must not be zero");
+      if (r.ok() && glm::any(glm::lessThan(rad, glm::dvec3(0)))) r.FailKey("irradiance", "must be >= 0");
       s.light.type = shading::LightType::kDirectional;
       if (r.ok()) s.light.vec = glm::normalize(dir);
       s.light.radiance = rad;
@@ -405,7 +422,7 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
           .Vec3("center", &s.light.vec)
           .Vec3("intensity", &s.light.radiance)
           .Number("radius", &s.light.radius, 1e-6, kMaxCoordinate);
-      if (r.ok() && glm::any(glm::lessThan(s.light.radiance, glm::dvec3(0)))) r.Fail("'intensity' must be >= 0");
+      if (r.ok() && glm::any(glm::lessThan(s.light.radiance, glm::dvec3(0)))) r.FailKey("intensity", "must be >= 0");
     } else if (r.ok() && type == "sg") {
       // A distant spherical Gaussian (seed 004): amplitude e^(sharpness (axis.l - 1)).
       glm::dvec3 axis{0, 1, 0}, amplitude{1, 1, 1};
@@ -417,28 +434,27 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
           .Vec3("axis", &axis)
           .Number("sharpness", &sharpness, 0, kMaxSgSharpness)
           .Vec3("amplitude", &amplitude);
-      if (r.ok() && glm::length(axis) < 1e-9) r.Fail("'axis' must not be zero");
-      if (r.ok() && glm::any(glm::lessThan(amplitude, glm::dvec3(0)))) r.Fail("'amplitude' must be >= 0");
+      if (r.ok() && glm::length(axis) < 1e-9) r.FailKey("axis", "must not be zero");
+      if (r.ok() && glm::any(glm::lessThan(amplitude, glm::dvec3(0)))) r.FailKey("amplitude", "must be >= 0");
       s.light.type = shading::LightType::kSg;
       if (r.ok()) s.light.vec = glm::normalize(axis);
       s.light.radius = sharpness;
       s.light.radiance = amplitude;
     } else if (r.ok()) {
-      r.Fail("'type' must be directional, sphere or sg");
+      r.FailKey("type", "must be directional, sphere or sg, got '" + type + "'");
     }
     if (!r.ok()) return R::Failure(r.error());
   }
   if (j.contains("material")) {
-    if (!j["material"].is_string()) return R::Failure(source + ": 'material' must be a spec string like \"ggx:0.05\"");
+    if (!j["material"].is_string()) return R::Failure(source + ": /material: must be a spec string like \"ggx:0.05\"");
     auto m = ParseMaterial(j["material"].get<std::string>(), s.material);
-    if (!m) return R::Failure(source + ": " + m.error());
+    if (!m) return R::Failure(source + ": /material: " + m.error());
     s.material = *m;
   }
   if (j.contains("camera")) {
     const auto& cj = j["camera"];
-    const std::string where = source + ": camera";
-    if (!cj.is_object()) return R::Failure(where + ": must be an object");
-    FieldReader r(cj, where);
+    if (!cj.is_object()) return R::Failure(source + ": /camera: must be an object");
+    FieldReader r(cj, source, "/camera");
     r.Keys({"target", "distance", "elevation_deg", "azimuth_deg", "fov_y_deg"})
         .Vec3("target", &s.rig.target)
         .Number("distance", &s.rig.distance, 1e-6, kMaxCoordinate)

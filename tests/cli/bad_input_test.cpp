@@ -417,6 +417,24 @@ std::vector<Case> UnitCases() {
        "render --scene s.json --frames 2 --size 16 16 --out out", 2, "colour"},
       {"SceneNotAnObject", File("s.json", "[1, 2, 3]\n"), "render --scene s.json --frames 2 --size 16 16 --out out", 2,
        "s.json"},
+      // scene validate / preview: the same reader, its JSON Pointer in the one line
+      {"SceneValidateBadRadius",
+       File("s.json", R"({"primitives": [{"type": "sphere", "center": [0, 0, 0], "radius": -1}]})"),
+       "scene validate s.json", 2, "s.json: /primitives/0/radius: must be a number > 0"},
+      {"SceneValidateUnknownLightKey",
+       File("s.json", R"({"primitives": [{"type": "plane"}], "light": {"direction": [0, 1, 0], "colour": 1}})"),
+       "scene validate s.json", 2, "s.json: /light/colour: unknown key"},
+      {"SceneValidateMissingFile", Nothing(), "scene validate nowhere.json", 2, "nowhere.json"},
+      {"SceneValidateNoFile", Nothing(), "scene validate", 2, "scene is required"},
+      {"SceneNoAction", Nothing(), "scene", 2, "subcommand"},
+      {"ScenePreviewBadScene", File("s.json", R"({"primitives": [{"type": "cube"}]})"), "scene preview s.json -o p.png",
+       2, "s.json: /primitives/0/type: unknown type 'cube'"},
+      {"ScenePreviewNoOutput", Nothing(), "scene preview sphere", 2, "--out is required"},
+      {"ScenePreviewOutMissingDirectory", Nothing(), "scene preview sphere -o nodir/p.png", 2, "nodir"},
+      {"ScenePreviewSizeZero", Nothing(), "scene preview sphere --size 0 8 -o p.png", 2, "--size"},
+      {"ScenePreviewFrameNegative", Nothing(), "scene preview sphere --frame -1 -o p.png", 2, "--frame"},
+      {"ScenePreviewBadCamera", Nothing(), "scene preview sphere --camera spin -o p.png", 2, "--camera"},
+      {"ScenePreviewBadMaterial", Nothing(), "scene preview sphere --material ggx:7 -o p.png", 2, "material"},
       // render: where it writes (refused before any device is touched)
       {"RenderOutUnderAFile", a_file, "render --frames 2 --size 16 16 --out file/out", 2, "file/out"},
       {"RenderPreviewUnderAFile", a_file, "render --frames 2 --size 16 16 --preview file/p.png --out out", 2,
@@ -628,3 +646,39 @@ TEST(GpuRunLock, SecondRunnerOnOneStoreFailsAtOnce) {
 }
 
 }  // namespace
+
+// `scene validate` on a good file: exit 0 and one line of what it holds.
+TEST(SceneCli, ValidatePrintsWhatTheFileHolds) {
+  const fs::path dir = Root() / "SceneValidate";
+  WriteText(dir / "s.json", R"({"name": "two", "primitives": [{"type": "sphere", "center": [0, 1, 0], "radius": 0.5},
+    {"type": "capsule", "a": [0, 0, 0], "b": [1, 0, 0]}, {"type": "plane"}], "light": {"type": "sg", "axis": [0, 1, 0],
+    "sharpness": 20, "amplitude": [1, 1, 1]}, "material": "beckmann:0.2"})");
+  const Outcome o = RunShimmer(dir, "scene validate s.json");
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_EQ(o.err, "");
+  EXPECT_NE(o.out.find("s.json: valid scene 'two': 3 primitives (1 spheres, 1 capsules, 1 planes), sg light, "
+                       "material beckmann:0.2"),
+            std::string::npos)
+      << o.out;
+}
+
+// `scene preview`: a PNG of the requested size, written whole under its name.
+TEST(GpuSceneCli, PreviewWritesAPngOfTheRequestedSize) {
+  const fs::path dir = Root() / "ScenePreview";
+  WriteText(dir / "s.json", R"({"primitives": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}]})");
+  const Outcome o = RunShimmer(dir, "scene preview s.json -o p.png --size 40 24 --frame 3");
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  const std::string bytes = ReadAll(dir / "p.png");
+  ASSERT_GT(bytes.size(), 24u);
+  EXPECT_EQ(bytes.substr(1, 3), "PNG");
+  auto be32 = [&](size_t at) {
+    return (uint32_t(uint8_t(bytes[at])) << 24) | (uint32_t(uint8_t(bytes[at + 1])) << 16) |
+           (uint32_t(uint8_t(bytes[at + 2])) << 8) | uint32_t(uint8_t(bytes[at + 3]));
+  };
+  EXPECT_EQ(be32(16), 40u);  // IHDR width
+  EXPECT_EQ(be32(20), 24u);  // IHDR height
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
+  std::sort(left.begin(), left.end());
+  EXPECT_EQ(left, (std::vector<std::string>{"p.png", "s.json"})) << "no temporary file left behind";
+}

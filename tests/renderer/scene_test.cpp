@@ -1,7 +1,13 @@
 // Scenes, material specs, camera paths and the packed scene (CPU only).
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
 
 #include "shimmer/renderer/scene.h"
 
@@ -53,32 +59,81 @@ TEST(SceneJson, LoadsPrimitivesLightMaterialCamera) {
   EXPECT_DOUBLE_EQ(s->rig.distance, 7);
 }
 
-TEST(SceneJson, ErrorsNameTheSourceAndField) {
+// Each malformed file gets one message that names the file and the JSON
+// Pointer (RFC 6901) of the key at fault, then the problem: exactly the
+// expected text up to where the problem's details start.
+TEST(SceneJson, EveryErrorNamesTheFileAndTheJsonPointerOfTheKey) {
   struct Case {
     const char* json;
-    const char* expect;
+    const char* expect;  // after "bad.json: "
   };
-  for (const Case& c :
-       {Case{"{", "not valid JSON"}, Case{"{}", "'primitives'"},
-        Case{R"({"primitives": [{"type": "cube"}]})", "unknown type 'cube'"},
-        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radius": -1}]})",
-             "primitives[0]: 'radius' must be a number > 0"},
-        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radius": 0}]})", "> 0"},
-        Case{R"({"primitives": [{"type": "sphere", "center": [0, 0]}]})", "'center'"},
-        Case{R"({"primitives": [{"type": "sphere", "radius": 1}]})", "'center' is required"},
-        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radus": 1}]})", "unknown key 'radus'"},
-        Case{R"({"primitives": [{"type": "sphere", "center": [1e300, 0, 0]}]})", "'center' must be finite"},
-        Case{R"({"name": 5, "primitives": [{"type": "sphere", "center": [0,0,0]}]})", "'name' must be a string"},
-        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,1e999]}]})", "bad.json:1:"},
-        Case{R"({"primitives": [{"type": "capsule", "a": [0,0,0], "b": [0,0,0]}]})", "coincide"},
-        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0]}], "light": {"type": "area"}})", "light"},
-        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0]}], "light": {"type": 3}})",
-             "light: 'type' must be a string"},
-        Case{R"({"primitives": [{"type": "sphere", "center": [0,0,0]}], "material": "ggx:7"})", "material"}}) {
-    auto s = ParseSceneJson(c.json, "bad.json");
-    EXPECT_FALSE(s.ok()) << c.json;
-    EXPECT_NE(s.error().find("bad.json"), std::string::npos) << s.error();
-    EXPECT_NE(s.error().find(c.expect), std::string::npos) << s.error();
+  const std::string sphere = R"({"type": "sphere", "center": [0,0,0]})";
+  const std::vector<Case> cases = {
+      {"[1, 2]", "/: a scene is a JSON object"},
+      {"{}", "/primitives: is required"},
+      {R"({"primitives": []})", "/primitives: must be a non-empty array"},
+      {R"({"primitives": {"type": "sphere"}})", "/primitives: must be a non-empty array"},
+      {R"({"primitives": [3]})", "/primitives/0: must be an object with a 'type'"},
+      {R"({"primitives": [{"center": [0,0,0]}]})", "/primitives/0/type: is required"},
+      {R"({"primitives": [{"type": 7}]})", "/primitives/0/type: must be a string"},
+      {R"({"primitives": [SPHERE, {"type": "cube"}]})", "/primitives/1/type: unknown type 'cube'"},
+      {R"({"primitives": [{"type": "sphere", "radius": 1}]})", "/primitives/0/center: is required"},
+      {R"({"primitives": [{"type": "sphere", "center": [0, 0]}]})", "/primitives/0/center: must be an array of 3"},
+      {R"({"primitives": [{"type": "sphere", "center": [1e300, 0, 0]}]})", "/primitives/0/center: must be finite"},
+      {R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radius": -1}]})",
+       "/primitives/0/radius: must be a number > 0"},
+      {R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radius": "big"}]})",
+       "/primitives/0/radius: must be a number"},
+      {R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radus": 1}]})",
+       "/primitives/0/radus: unknown key (expected: type, center, radius)"},
+      {R"({"primitives": [SPHERE, SPHERE, {"type": "capsule", "a": [0,0,0], "b": [0,0,0]}]})",
+       "/primitives/2/b: coincides with 'a'"},
+      {R"({"primitives": [{"type": "capsule", "a": [0,0,0]}]})", "/primitives/0/b: is required"},
+      {R"({"primitives": [{"type": "plane", "bump_slope": 0.1}]})",
+       "/primitives/0/bump_frequency: must be > 0 when 'bump_slope' is"},
+      {R"({"primitives": [{"type": "plane", "height": null}]})", "/primitives/0/height: must be a number"},
+      {R"({"name": 5, "primitives": [SPHERE]})", "/name: must be a string"},
+      {R"({"primitives": [SPHERE], "lights": {}})", "/lights: unknown key"},
+      {R"({"primitives": [SPHERE], "a/b~c": 1})", "/a~1b~0c: unknown key"},
+      {R"({"primitives": [SPHERE], "light": [1]})", "/light: must be an object"},
+      {R"({"primitives": [SPHERE], "light": {"type": 3}})", "/light/type: must be a string"},
+      {R"({"primitives": [SPHERE], "light": {"type": "area"}})", "/light/type: must be directional, sphere or sg"},
+      {R"({"primitives": [SPHERE], "light": {"direction": [0, 0, 0]}})", "/light/direction: must not be zero"},
+      {R"({"primitives": [SPHERE], "light": {"irradiance": [1, -1, 1]}})", "/light/irradiance: must be >= 0"},
+      {R"({"primitives": [SPHERE], "light": {"type": "sphere", "intensity": [1, 1, 1], "radius": 0}})",
+       "/light/radius: must be a number in [1e-06, 1e+06]"},
+      {R"({"primitives": [SPHERE], "light": {"type": "sg", "axis": [0, 1, 0], "amplitude": [1, 1, 1]}})",
+       "/light/sharpness: is required"},
+      {R"({"primitives": [SPHERE], "material": 0.05})", "/material: must be a spec string"},
+      {R"({"primitives": [SPHERE], "material": "ggx:7"})", "/material: material 'ggx:7'"},
+      {R"({"primitives": [SPHERE], "camera": "far"})", "/camera: must be an object"},
+      {R"({"primitives": [SPHERE], "camera": {"fov_y_deg": 180}})", "/camera/fov_y_deg: must be a number in [1, 170]"},
+      {R"({"primitives": [SPHERE], "camera": {"zoom": 2}})", "/camera/zoom: unknown key"},
+  };
+  ASSERT_GE(cases.size(), 15u);
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("scene_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path file = dir / "bad.json";
+  for (const Case& c : cases) {
+    std::string json = c.json;
+    for (size_t at; (at = json.find("SPHERE")) != std::string::npos;) json.replace(at, 6, sphere);
+    std::ofstream(file) << json;
+    auto s = LoadScene(file.string());
+    ASSERT_FALSE(s.ok()) << json;
+    const std::string expect = file.string() + ": " + c.expect;
+    EXPECT_EQ(s.error().rfind(expect, 0), 0u) << json << "\n  got:    " << s.error() << "\n  wanted: " << expect;
+    EXPECT_EQ(s.error().find('\n'), std::string::npos) << s.error();  // one line
+  }
+  std::filesystem::remove_all(dir);
+}
+
+// Syntax errors come from the JSON parser, with the line.
+TEST(SceneJson, ASyntaxErrorNamesTheFileAndLine) {
+  for (const char* json : {"{", R"({"primitives": [{"type": "sphere", "center": [0,0,1e999]}]})"}) {
+    auto s = ParseSceneJson(json, "bad.json");
+    ASSERT_FALSE(s.ok()) << json;
+    EXPECT_EQ(s.error().rfind("bad.json:1:", 0), 0u) << s.error();
   }
 }
 

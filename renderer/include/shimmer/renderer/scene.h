@@ -55,7 +55,7 @@ inline constexpr double kMaxSgSharpness = 1e6;
 
 std::vector<std::string_view> BuiltinSceneNames();
 // A built-in name, or else a path to a JSON scene file. Errors name the file
-// and the key ("s.json: primitives[0]: 'center' is required").
+// and the JSON Pointer of the key ("s.json: /primitives/0/center: is required").
 Result<Scene> LoadScene(const std::string& name_or_file);
 Result<Scene> ParseSceneJson(std::string_view text, const std::string& source);
 Result<Scene> SceneFromJson(const nlohmann::json& json, const std::string& source);

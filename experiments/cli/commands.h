@@ -12,6 +12,7 @@
 #include "shimmer/core/result.h"
 
 #include "shimmer/experiments/runner.h"
+#include "shimmer/renderer/scene.h"
 
 namespace shimmer::cli {
 
@@ -71,6 +72,9 @@ class NewDirectories {
   std::vector<std::filesystem::path> created_;  // in creation order, parents first
   bool with_contents_;
 };
+
+// "--camera NAME" as a camera path; UsageError naming the paths for anything else.
+scene::CameraPath CameraPathOption(const std::string& name);
 
 // "--param name=value" as a (name, value) pair; UsageError for anything else.
 std::pair<std::string, double> ParseParamOption(const std::string& text);

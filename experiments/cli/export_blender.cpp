@@ -30,17 +30,12 @@ void Run(const ExportBlenderOptions& o) {
   shot.scene = Take(scene::LoadScene(o.scene), {{"unknown scene", "SCENE: unknown scene"}});
   shot.material = shot.scene.material;
   if (!o.material.empty()) shot.material = Take(scene::ParseMaterial(o.material, shot.scene.material));
-  const auto camera = scene::ParseCameraPath(o.camera);
-  if (!camera) {
-    std::string list;
-    for (auto n : scene::CameraPathNames()) list += (list.empty() ? "" : ", ") + std::string(n);
-    throw UsageError("--camera must be one of " + list + ", got '" + o.camera + "'");
-  }
+  const scene::CameraPath camera = CameraPathOption(o.camera);
   if (o.frames < 1) throw UsageError("--frames must be >= 1, got " + std::to_string(o.frames));
   if (o.frame < 0 || o.frame >= o.frames)
     throw UsageError("--frame " + std::to_string(o.frame) + " is out of range: the sequence has --frames " +
                      std::to_string(o.frames) + " (frames 0.." + std::to_string(o.frames - 1) + ")");
-  shot.camera_path = *camera;
+  shot.camera_path = camera;
   shot.frame = o.frame;
   shot.fps = o.fps;
   shot.width = o.size[0];

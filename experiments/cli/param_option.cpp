@@ -14,6 +14,13 @@ Error WithFlagNames(const Error& error, const FieldFlags& fields) {
   return error;
 }
 
+scene::CameraPath CameraPathOption(const std::string& name) {
+  if (const auto path = scene::ParseCameraPath(name)) return *path;
+  std::string list;
+  for (auto n : scene::CameraPathNames()) list += (list.empty() ? "" : ", ") + std::string(n);
+  throw UsageError("--camera must be one of " + list + ", got '" + name + "'");
+}
+
 void RequireParentDirectory(const std::string& option, const std::string& path) {
   const std::filesystem::path parent = std::filesystem::path(path).parent_path();
   std::error_code ec;

@@ -73,13 +73,7 @@ void Run(const RenderOptions& o, const CLI::App& cmd) {
   s.scene = Take(scene::LoadScene(o.scene), {{"unknown scene", "--scene: unknown scene"}});
   s.material = s.scene.material;
   if (!o.material.empty()) s.material = Take(scene::ParseMaterial(o.material, s.scene.material));
-  const auto camera = scene::ParseCameraPath(o.camera);
-  if (!camera) {
-    std::string list;
-    for (auto n : scene::CameraPathNames()) list += (list.empty() ? "" : ", ") + std::string(n);
-    throw UsageError("--camera must be one of " + list + ", got '" + o.camera + "'");
-  }
-  s.camera = *camera;
+  s.camera = CameraPathOption(o.camera);
   s.variant = o.variant;
   s.variant_file = o.variant_file;
   for (const std::string& p : o.params) s.param_overrides.push_back(ParseParamOption(p));

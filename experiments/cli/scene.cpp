@@ -43,13 +43,7 @@ void Preview(const SceneOptions& o) {
   render::RenderSettings s;
   s.scene = LoadOrThrow(o.scene);
   s.material = o.material.empty() ? s.scene.material : Take(scene::ParseMaterial(o.material, s.scene.material));
-  const auto camera = scene::ParseCameraPath(o.camera);
-  if (!camera) {
-    std::string list;
-    for (auto n : scene::CameraPathNames()) list += (list.empty() ? "" : ", ") + std::string(n);
-    throw UsageError("--camera must be one of " + list + ", got '" + o.camera + "'");
-  }
-  s.camera = *camera;
+  s.camera = CameraPathOption(o.camera);
   s.width = o.size[0];
   s.height = o.size[1];
   s.frames = o.frame + 1;

@@ -380,6 +380,40 @@ const KernelKind kKernelKinds[] = {{"sphere-field", "none", DerivativeSource::kQ
                                    {"sphere", "none", DerivativeSource::kAnalytic, 2, 0},
                                    {"sphere-field", "none", DerivativeSource::kAnalytic, 2, 0.02}};
 
+// The two user variants of docs/variants.md (examples/variants/): the tk19
+// one renders the built-in tk19's frame, and the footprint box, with its
+// footprint clamped to zero, the unfiltered `none` frame; with a footprint it
+// filters (the frame changes). Relative tolerance: the kernels compile apart.
+TEST(GpuRender, DocumentedUserVariantsRenderAsTheirBuiltInForms) {
+  const std::string examples = std::string(SHIMMER_SOURCE_DIR) + "/examples/variants/";
+  auto render = [](const std::string& variant, const std::string& file,
+                   std::vector<std::pair<std::string, double>> params) {
+    RenderSettings s = Settings("sphere-field", variant, DerivativeSource::kQuadFine, 48);
+    s.variant_file = file;
+    s.param_overrides = std::move(params);
+    return RenderOne(s, 1);
+  };
+  auto max_relative_difference = [](const Frame& a, const Frame& b) {
+    EXPECT_EQ(a.planes.size(), b.planes.size());
+    double worst = 0;
+    const size_t plane = size_t(a.width) * a.height;
+    for (size_t i = 0; i < 3 * plane && i < a.planes.size() && i < b.planes.size(); ++i) {  // beauty R, G, B
+      const double x = a.planes[kBeautyR * plane + i], y = b.planes[kBeautyR * plane + i];
+      worst = std::max(worst, std::abs(x - y) / std::max({std::abs(x), std::abs(y), 1e-3}));
+    }
+    return worst;
+  };
+  const std::vector<std::pair<std::string, double>> tk19_params = {{"sigma2", 0.5}, {"kappa", 0.18}};
+  EXPECT_LT(max_relative_difference(render("tk19", "", tk19_params),
+                                    render("none", examples + "tk19_as_user_variant.glsl", tk19_params)),
+            1e-5);
+  const Frame none = render("none", "", {});
+  EXPECT_LT(max_relative_difference(none, render("none", examples + "footprint_box_density.glsl", {{"fp_max", 0}})),
+            1e-5);
+  EXPECT_GT(max_relative_difference(none, render("none", examples + "footprint_box_density.glsl", {{"fp_max", 1}})),
+            1e-2);
+}
+
 // Images taller than a storage buffer holds render in bands of rows; a band
 // starts on a multiple of 8 rows, so every pixel sees the same quad, lanes and
 // samples as in one dispatch, and an adaptive round merges into the band's

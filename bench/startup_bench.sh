@@ -21,15 +21,12 @@ export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
 
-render() {  # render MODE CACHE_HOME ROUND
-  local out="$scratch/out-$1-$3" start end
+render() {  # render MODE CACHE_HOME ROUND [shimmer render options...]
+  local out="$scratch/out-$1-$3" start end cache=on
+  [[ $1 == off ]] && cache=off
   start=$(date +%s%N)
-  if [[ $1 == off ]]; then
-    SHIMMER_CACHE=off XDG_CACHE_HOME="$2" "$shimmer" render --variant tk21 --frames 2 --size 64 64 "${@:4}" \
-      --out "$out" >/dev/null
-  else
-    XDG_CACHE_HOME="$2" "$shimmer" render --variant tk21 --frames 2 --size 64 64 "${@:4}" --out "$out" >/dev/null
-  fi
+  SHIMMER_CACHE=$cache XDG_CACHE_HOME="$2" "$shimmer" render --variant tk21 --frames 2 --size 64 64 "${@:4}" \
+    --out "$out" >/dev/null
   end=$(date +%s%N)
   echo "$1 $(( (end - start) / 1000000 )) $out/sequence.json" >>"$scratch/runs"
 }

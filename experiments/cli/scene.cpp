@@ -23,12 +23,8 @@ struct SceneOptions {
   std::string out;
 };
 
-scene::Scene LoadOrThrow(const std::string& name) {
-  return Take(scene::LoadScene(name), {{"unknown scene", "unknown scene"}});
-}
-
 void Validate(const SceneOptions& o) {
-  const scene::Scene s = LoadOrThrow(o.scene);
+  const scene::Scene s = Take(scene::LoadScene(o.scene));
   int counts[3] = {0, 0, 0};
   for (const scene::Primitive& p : s.primitives) ++counts[static_cast<int>(p.type)];
   std::printf(
@@ -41,7 +37,7 @@ void Validate(const SceneOptions& o) {
 
 void Preview(const SceneOptions& o) {
   render::RenderSettings s;
-  s.scene = LoadOrThrow(o.scene);
+  s.scene = Take(scene::LoadScene(o.scene));
   s.material = o.material.empty() ? s.scene.material : Take(scene::ParseMaterial(o.material, s.scene.material));
   s.camera = CameraPathOption(o.camera);
   s.width = o.size[0];

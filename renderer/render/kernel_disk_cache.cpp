@@ -46,12 +46,16 @@ void WarnCache(const std::string& text) {
   if (said->insert(text).second) std::fprintf(stderr, "shimmer: warning: %s\n", text.c_str());
 }
 
+void WarnIgnoredCacheFile(const fs::path& path, const std::string& why) {
+  WarnCache("ignoring the kernel cache file " + path.string() + " (" + why + "); it will be rebuilt");
+}
+
 std::optional<std::string> ReadCacheFile(const fs::path& path, std::string_view kind) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return std::nullopt;  // absent (or unreadable: treated alike, the compile runs)
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   auto reject = [&](const std::string& why) -> std::optional<std::string> {
-    WarnCache("ignoring the kernel cache file " + path.string() + " (" + why + "); it will be rebuilt");
+    WarnIgnoredCacheFile(path, why);
     return std::nullopt;
   };
   const std::size_t eol = bytes.find('\n');

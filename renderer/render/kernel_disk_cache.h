@@ -38,5 +38,8 @@ void TrimCacheFolder(const std::filesystem::path& folder, std::uintmax_t max_byt
 
 // "shimmer: warning: <text>" on stderr, each distinct text once per process.
 void WarnCache(const std::string& text);
+// The warning for a cache file that is not used: its path, why, and that it
+// will be rebuilt.
+void WarnIgnoredCacheFile(const std::filesystem::path& path, const std::string& why);
 
 }  // namespace shimmer::render

@@ -123,7 +123,7 @@ std::optional<shading::Spirv> SpirvOf(const std::string& payload, const std::fil
   shading::Spirv words(payload.size() / sizeof(std::uint32_t));
   std::memcpy(words.data(), payload.data(), words.size() * sizeof(std::uint32_t));
   if (payload.size() % sizeof(std::uint32_t) != 0 || words.size() < 5 || words[0] != kSpirvMagic) {
-    WarnCache("ignoring the kernel cache file " + file.string() + " (not a SPIR-V module); it will be rebuilt");
+    WarnIgnoredCacheFile(file, "not a SPIR-V module");
     return std::nullopt;
   }
   return words;
@@ -238,7 +238,7 @@ Result<std::unique_ptr<vk::PipelineCache>> LoadPipelineCache(vk::Context& contex
         *loaded_bytes = data->size();
         return seeded;
       }
-      WarnCache("ignoring the kernel cache file " + file->string() + " (" + seeded.error() + "); it will be rebuilt");
+      WarnIgnoredCacheFile(*file, seeded.error());
     }
   return context.CreatePipelineCache();
 }

@@ -1,9 +1,11 @@
 // Filters the slope density itself instead of widening alpha: the NDF's
 // slope-space density P22 averaged over the pixel's footprint rectangle with
 // a 5-tap rule (the centre with weight 1/2, the four corners with 1/8 each).
-// The footprint half-sides are clamped to fp_max (--param fp_max=V); with
-// fp_max = 0 it is the unfiltered NDF. docs/variants.md explains every name.
-FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {
+// The footprint half-sides are clamped to fp_max; with fp_max = 0 it is the
+// unfiltered NDF. docs/variants.md explains every name.
+// shimmer-variant: P22 averaged over the footprint rectangle by a 5-tap rule
+// shimmer-param: fp_max = 1 in [0, 10000]: clamp on the footprint's slope-space half-sides
+FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, UserParams p) {
   vec2 a = clampAlpha(alpha);
   vec2 s = clampSlope(f.hpp);
   vec2 h = min(footprintHalfSides(f), vec2(p.fp_max, p.fp_max));

@@ -1,9 +1,11 @@
 // Tokuyoshi and Kaplanyan 2019 in the form engines ship (the built-in `tk19`),
 // written as a user variant: it widens alpha.
 //   alpha'^2 = sat(alpha^2 + min(2 sigma2 S, kappa)),  S = |dn/dx|^2 + |dn/dy|^2
-// Parameters: --param sigma2=V (the kernel's screen-space variance) and
-// --param kappa=V (the clamp). docs/variants.md explains every name used here.
-FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {
+// docs/variants.md explains every name used here.
+// shimmer-variant: Tokuyoshi-Kaplanyan 2019 as engines ship it (the built-in tk19), as a user file
+// shimmer-param: sigma2 = 0.25 in [0, 10000]: screen-space variance of the filtering kernel
+// shimmer-param: kappa = 0.18 in [0, 10000]: clamp on the kernel roughness
+FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, UserParams p) {
   vec2 a = clampAlpha(alpha);  // as every built-in variant does first
   real spread = normalSpread(f.dn_dx, f.dn_dy);
   real k = min(real(2) * p.sigma2 * spread, p.kappa);

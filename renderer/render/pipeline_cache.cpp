@@ -27,6 +27,7 @@ using Clock = std::chrono::steady_clock;
 double MsSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
 constexpr std::string_view kUserVariantFile = "user_variant.glsl";
+constexpr std::string_view kUserParamsFile = "user_params.glsl";  // UserParamsGlsl
 
 // The kernel and the files it includes besides the shading core.
 std::vector<shading::GlslFile> KernelFiles(bool user_variant, bool sg_light, shading::GlslFile* main) {
@@ -46,7 +47,7 @@ std::vector<shading::GlslFile> KernelFiles(bool user_variant, bool sg_light, sha
 }
 
 constexpr std::string_view kUserVariantSignature =
-    "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p)";
+    "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, UserParams p)";
 
 // A compile failure of the user's variant file as one line. glslang's log has
 // a line per error ("ERROR: user_variant.glsl:2: 'x' : undeclared identifier",
@@ -173,16 +174,20 @@ DeviceCache& Devices() {
 
 }  // namespace
 
-Result<std::shared_ptr<const KernelModule>> KernelSpirv(const std::string& user_text, const std::string& user_file,
-                                                        bool sg_light, double* compile_ms) {
-  const bool user = !user_file.empty();
-  const std::string key = std::string(sg_light ? "sg:" : "delta:") + (user ? "user:" + user_text : std::string());
+Result<std::shared_ptr<const KernelModule>> KernelSpirv(const shading::UserVariant* user, bool sg_light,
+                                                        double* compile_ms) {
+  const std::string prelude = user ? shading::UserParamsGlsl(*user) : std::string();
+  const std::string key =
+      std::string(sg_light ? "sg:" : "delta:") + (user ? "user:" + prelude + "\n" + user->text : std::string());
   const auto t0 = Clock::now();
   std::lock_guard lock(Modules().mutex);
   if (auto it = Modules().modules.find(key); it != Modules().modules.end()) return it->second;
   shading::GlslFile main;
   std::vector<shading::GlslFile> extra = KernelFiles(user, sg_light, &main);
-  if (user) extra.push_back({std::string(kUserVariantFile), user_text});
+  if (user) {
+    extra.push_back({std::string(kUserParamsFile), prelude});
+    extra.push_back({std::string(kUserVariantFile), user->text});
+  }
   const std::string compile_key = shading::CompileKey(main, extra);
   // Only modules that compiled are cached: a user's broken file is compiled
   // (and its error reported) every time.
@@ -190,7 +195,7 @@ Result<std::shared_ptr<const KernelModule>> KernelSpirv(const std::string& user_
       CachedSpirv(CacheFolder("spirv"), compile_key + ".spv", [&] { return shading::CompileCompute(main, extra); });
   if (!compiled) {
     if (!user) return Prefixed("render.comp does not compile", compiled.failure());
-    return Result<std::shared_ptr<const KernelModule>>::Failure(UserVariantError(compiled.error(), user_file));
+    return Result<std::shared_ptr<const KernelModule>>::Failure(UserVariantError(compiled.error(), user->file));
   }
   auto module = std::make_shared<const KernelModule>(KernelModule{std::move(*compiled), compile_key});
   Modules().modules.emplace(key, module);

@@ -13,22 +13,23 @@
 #include <vector>
 
 #include "shimmer/core/result.h"
+#include "shimmer/renderer/user_variant.h"
 #include "spirv_compiler.h"
 #include "vk.h"
 
 namespace shimmer::render {
 
-// render.comp compiled once per process for the built-in variants (empty
-// `user_text`), or once per distinct user variant text, each with or
-// without the SG-light integral (`sg_light`: the scene has an SG light).
-// `user_file` names the user's file in compile errors. `compile_ms` is set
-// when this call compiled (0 when cached).
+// render.comp compiled once per process for the built-in variants (`user`
+// null), or once per distinct user variant text, each with or without the
+// SG-light integral (`sg_light`: the scene has an SG light). Compile errors
+// name the user's file as they gave it. `compile_ms` is set when this call
+// compiled (0 when cached).
 struct KernelModule {
   shading::Spirv spirv;
   std::string key;  // shading::CompileKey of its sources
 };
-Result<std::shared_ptr<const KernelModule>> KernelSpirv(const std::string& user_text, const std::string& user_file,
-                                                        bool sg_light, double* compile_ms);
+Result<std::shared_ptr<const KernelModule>> KernelSpirv(const shading::UserVariant* user, bool sg_light,
+                                                        double* compile_ms);
 
 // A device shared by every renderer asking for the same options, created on
 // first use and never destroyed: tearing Vulkan down from static destructors

@@ -45,17 +45,6 @@ std::mutex& HooksMutex() {
   return m;
 }
 
-// The user's variant file, read whole; the error names it as they gave it.
-Result<std::string> ReadVariantFile(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) return Result<std::string>::Failure(path + ": no such variant file");
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!in && !in.eof()) return Result<std::string>::Failure(path + ": cannot read the variant file", ErrorCode::kIo);
-  return text.str();
-}
-
 }  // namespace
 
 namespace testing {
@@ -216,14 +205,8 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
   im.variant = *variant;
 
   // Kernel source first: a compile error is reported before touching Vulkan.
-  std::string user_text;
-  if (!settings.variant_file.empty()) {
-    auto text = ReadVariantFile(settings.variant_file);
-    if (!text) return text.failure();
-    user_text = std::move(*text);
-  }
   const bool sg_light = settings.scene.light.type == shading::LightType::kSg;
-  auto spirv = KernelSpirv(user_text, settings.variant_file, sg_light, &im.timings.compile_ms);
+  auto spirv = KernelSpirv(im.variant.user.get(), sg_light, &im.timings.compile_ms);
   if (!spirv) return spirv.failure();
 
   vk::ContextOptions options;

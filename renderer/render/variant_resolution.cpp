@@ -11,12 +11,15 @@ Result<ResolvedVariant> ResolveVariant(const RenderSettings& s) {
   const bool reference = s.reference_spp > 0 || s.reference_tolerance > 0;
   if (!s.variant_file.empty()) {
     if (reference) return R::Failure("a reference renders variant none, not a variant file");
+    auto user = shading::LoadUserVariant(s.variant_file);
+    if (!user) return user.failure();
     v.name = "user:" + std::filesystem::path(s.variant_file).filename().string();
     v.id = 0;
-    // A user variant may read any of the four parameters; each is validated
-    // as for the catalogue's variants.
-    auto params = shading::ResolveUserParams(s.param_overrides);
+    // The parameters the file declares (or the four built-in ones), each
+    // checked against its declared range.
+    auto params = shading::ResolveUserParams(*user, s.param_overrides);
     if (!params) return params.failure();
+    v.user = std::make_shared<const shading::UserVariant>(std::move(*user));
     v.params = params->values;
     v.shown_params = params->shown;
     return v;

@@ -68,9 +68,12 @@ vec4 sceneWord(int i) { return scene.words[i]; }
 #include "core.glsl"
 
 #ifdef SHIMMER_USER_VARIANT
+// struct UserParams and userParams(VariantParams), generated from the
+// file's shimmer-param lines (user_variant.cpp).
+#include "user_params.glsl"
 #include "user_variant.glsl"
 FilteredNdf runVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {
-  return userVariant(ndf, alpha, f, p);
+  return userVariant(ndf, alpha, f, userParams(p));
 }
 #else
 FilteredNdf runVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {

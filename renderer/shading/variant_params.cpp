@@ -71,14 +71,4 @@ Result<Params<double>> ResolveParams(const VariantInfo& info,
   return values;
 }
 
-Result<UserParams> ResolveUserParams(std::span<const std::pair<std::string, double>> overrides) {
-  UserParams user;
-  for (const auto& [name, value] : overrides) {
-    if (Status s = ValidateParam(name, value); !s) return s.failure();
-    user.values.*(FindParamField(name)->member) = value;
-    user.shown.push_back({name, value});
-  }
-  return user;
-}
-
 }  // namespace shimmer::shading

@@ -169,8 +169,8 @@ std::string HugeSpec() {
 
 const char* const kGoodVariant =
     "// doubles the roughness\n"
-    "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {\n"
-    "  return evalVariant(VARIANT_NONE, ndf, alpha * real(2), f, p);\n"
+    "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, UserParams p) {\n"
+    "  return evalVariant(VARIANT_NONE, ndf, alpha * real(2), f, variantParams(p));\n"
     "}\n";
 
 // A store with finished rows, made once per test process by a real run.
@@ -386,7 +386,7 @@ std::vector<Case> UnitCases() {
       {"RenderGlslSyntaxError",
        File("syntax.glsl",
             "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, "
-            "VariantParams p) {\n  return evalVariant(VARIANT_NONE, ndf alpha, f, p)\n}\n"),
+            "UserParams p) {\n  return evalVariant(VARIANT_NONE, ndf alpha, f, variantParams(p))\n}\n"),
        "render --frames 2 --size 16 16 --variant-file syntax.glsl --out out", 2, "syntax.glsl:2"},
       {"RenderGlslWrongSignature", File("sig.glsl", "float userVariant(vec2 alpha) {\n  return alpha.x;\n}\n"),
        "render --frames 2 --size 16 16 --variant-file sig.glsl --out out", 2, "sig.glsl"},

@@ -66,8 +66,8 @@ TEST(GpuCli, UserVariantFileRendersAndCompileErrorsNameFileAndLine) {
   {
     std::ofstream f(file);
     f << "// doubles the roughness\n"
-         "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {\n"
-         "  return evalVariant(VARIANT_NONE, ndf, alpha * real(2), f, p);\n"
+         "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, UserParams p) {\n"
+         "  return evalVariant(VARIANT_NONE, ndf, alpha * real(2), f, variantParams(p));\n"
          "}\n";
   }
   CliRun ok = Shimmer("render --scene sphere --frames 1 --size 16 16 --variant-file " + file.string() + " --out " +
@@ -77,7 +77,7 @@ TEST(GpuCli, UserVariantFileRendersAndCompileErrorsNameFileAndLine) {
   fs::remove_all(dir);
   {
     std::ofstream f(file);
-    f << "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {\n"
+    f << "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, UserParams p) {\n"
          "  return undefinedThing(alpha);\n"
          "}\n";
   }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "shimmer/renderer/shading.h"
+#include "shimmer/renderer/user_variant.h"
 #include "spirv_compiler.h"
 
 namespace shimmer::shading {
@@ -150,13 +151,14 @@ TEST(GlslCompile, EveryShadingFileCompilesToSpirvInItsContext) {
 
 // Every kernel compiles as the renderer compiles it: as it is, and, where it
 // takes a user variant file (--variant-file), with SHIMMER_USER_VARIANT defined
-// after #version and a user_variant.glsl, as pipeline_cache.cpp's KernelFiles does.
+// after #version, a user_params.glsl and a user_variant.glsl, as pipeline_cache.cpp's KernelFiles does.
 TEST(GlslCompile, EveryKernelCompilesToSpirv) {
   std::vector<GlslFile> extra = FilesOnDisk("renderer/shading", ".glsl");
   for (GlslFile& f : FilesOnDisk("renderer/shaders", ".glsl")) extra.push_back(std::move(f));  // channels.glsl
+  extra.push_back({"user_params.glsl", UserParamsGlsl(*ParseUserVariant("", "user.glsl"))});
   extra.push_back({"user_variant.glsl",
-                   "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {\n"
-                   "  return evalVariant(VARIANT_TK19, ndf, alpha * real(2), f, p);\n}\n"});
+                   "FilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, UserParams p) {\n"
+                   "  return evalVariant(VARIANT_TK19, ndf, alpha * real(2), f, variantParams(p));\n}\n"});
   const std::vector<GlslFile> kernels = FilesOnDisk("renderer/shaders", ".comp");
   ASSERT_GE(kernels.size(), 1u);
   for (const GlslFile& k : kernels) {

@@ -189,12 +189,6 @@ Status ValidateParam(std::string_view name, double value);
 // an unknown parameter or a value out of range.
 Result<Params<double>> ResolveParams(const VariantInfo& info,
                                      std::span<const std::pair<std::string, double>> overrides);
-// A user variant (--variant-file) may read any of the four parameters.
-struct UserParams {
-  Params<double> values;
-  std::vector<std::pair<std::string, double>> shown;  // the overrides, as given
-};
-Result<UserParams> ResolveUserParams(std::span<const std::pair<std::string, double>> overrides);
 
 // The GLSL sources of the shading core, by file name (core.glsl first).
 std::span<const std::pair<std::string_view, std::string_view>> GlslSources();

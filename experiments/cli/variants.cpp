@@ -1,11 +1,14 @@
-// `shimmer variants`: the filter catalogue with parameters, defaults and sources.
+// `shimmer variants`: the filter catalogue with parameters, defaults and
+// sources; with --file, a user's variant files, checked and described.
 #include <cstdio>
 #include <iostream>
 
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "shimmer/renderer/renderer.h"
 #include "shimmer/renderer/shading.h"
+#include "shimmer/renderer/user_variant.h"
 
 namespace shimmer::cli {
 
@@ -38,14 +41,41 @@ void PrintCatalogue() {
   }
 }
 
+nlohmann::json UserVariantJson(const shading::UserVariant& v) {
+  nlohmann::json params = nlohmann::json::array();
+  for (const shading::UserParam& p : v.params)
+    params.push_back({{"name", p.name}, {"default", p.default_value}, {"range", {p.lo, p.hi}}, {"meaning", p.meaning}});
+  return {{"file", v.file}, {"summary", v.summary}, {"params", params}, {"declared", v.declared}};
+}
+
+// Each file parsed and compiled into the render kernel (no device needed), so
+// that a file listed here is one a render, spec, sweep or fit accepts.
+void DescribeFiles(const std::vector<std::string>& files, bool json) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const std::string& path : files) {
+    const shading::UserVariant v = Take(shading::LoadUserVariant(path));
+    if (Status s = render::CheckUserVariant(v); !s) throw CommandError(s.failure());
+    if (json)
+      list.push_back(UserVariantJson(v));
+    else
+      std::printf("%s\n", shading::DescribeUserVariant(v).c_str());
+  }
+  if (json) std::cout << list.dump(2) << "\n";
+}
+
 }  // namespace
 
 void AddVariantsCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("variants", "List the filter variants, their parameters and sources");
   auto json = std::make_shared<bool>(false);
+  auto files = std::make_shared<std::vector<std::string>>();
   cmd->add_flag("--json", *json, "Print the catalogue as a JSON array");
-  cmd->callback([json] {
-    if (*json)
+  cmd->add_option("--file", *files,
+                  "Check and describe a user variant file instead: its summary and declared parameters (repeatable)");
+  cmd->callback([json, files] {
+    if (!files->empty())
+      DescribeFiles(*files, *json);
+    else if (*json)
       std::cout << CatalogueJson().dump(2) << "\n";
     else
       PrintCatalogue();

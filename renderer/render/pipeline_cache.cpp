@@ -30,10 +30,11 @@ constexpr std::string_view kUserVariantFile = "user_variant.glsl";
 constexpr std::string_view kUserParamsFile = "user_params.glsl";  // UserParamsGlsl
 
 // The kernel and the files it includes besides the shading core.
-std::vector<shading::GlslFile> KernelFiles(bool user_variant, bool sg_light, shading::GlslFile* main) {
+std::vector<shading::GlslFile> KernelFiles(std::string_view kernel, bool user_variant, bool sg_light,
+                                           shading::GlslFile* main) {
   std::vector<shading::GlslFile> extra;
   for (const auto& [name, body] : embedded::Sources()) {
-    if (name == "render.comp")
+    if (name == kernel)
       *main = {std::string(name), std::string(body)};
     else
       extra.push_back({std::string(name), std::string(body)});
@@ -174,16 +175,16 @@ DeviceCache& Devices() {
 
 }  // namespace
 
-Result<std::shared_ptr<const KernelModule>> KernelSpirv(const shading::UserVariant* user, bool sg_light,
-                                                        double* compile_ms) {
+Result<std::shared_ptr<const KernelModule>> KernelSpirv(std::string_view kernel, const shading::UserVariant* user,
+                                                        bool sg_light, double* compile_ms) {
   const std::string prelude = user ? shading::UserParamsGlsl(*user) : std::string();
-  const std::string key =
-      std::string(sg_light ? "sg:" : "delta:") + (user ? "user:" + prelude + "\n" + user->text : std::string());
+  const std::string key = std::string(kernel) + (sg_light ? ":sg:" : ":delta:") +
+                          (user ? "user:" + prelude + "\n" + user->text : std::string());
   const auto t0 = Clock::now();
   std::lock_guard lock(Modules().mutex);
   if (auto it = Modules().modules.find(key); it != Modules().modules.end()) return it->second;
   shading::GlslFile main;
-  std::vector<shading::GlslFile> extra = KernelFiles(user, sg_light, &main);
+  std::vector<shading::GlslFile> extra = KernelFiles(kernel, user != nullptr, sg_light, &main);
   if (user) {
     extra.push_back({std::string(kUserParamsFile), prelude});
     extra.push_back({std::string(kUserVariantFile), user->text});
@@ -194,7 +195,7 @@ Result<std::shared_ptr<const KernelModule>> KernelSpirv(const shading::UserVaria
   auto compiled =
       CachedSpirv(CacheFolder("spirv"), compile_key + ".spv", [&] { return shading::CompileCompute(main, extra); });
   if (!compiled) {
-    if (!user) return Prefixed("render.comp does not compile", compiled.failure());
+    if (!user) return Prefixed(std::string(kernel) + " does not compile", compiled.failure());
     return Result<std::shared_ptr<const KernelModule>>::Failure(UserVariantError(compiled.error(), user->file));
   }
   auto module = std::make_shared<const KernelModule>(KernelModule{std::move(*compiled), compile_key});

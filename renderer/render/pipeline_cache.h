@@ -19,8 +19,9 @@
 
 namespace shimmer::render {
 
-// render.comp compiled once per process for the built-in variants (`user`
-// null), or once per distinct user variant text, each with or without the
+// A kernel of renderer/shaders (render.comp, ndf_probe.comp) compiled once
+// per process for the built-in variants (`user` null), or once per distinct
+// user variant text, each with or without the
 // SG-light integral (`sg_light`: the scene has an SG light). Compile errors
 // name the user's file as they gave it. `compile_ms` is set when this call
 // compiled (0 when cached).
@@ -28,8 +29,8 @@ struct KernelModule {
   shading::Spirv spirv;
   std::string key;  // shading::CompileKey of its sources
 };
-Result<std::shared_ptr<const KernelModule>> KernelSpirv(const shading::UserVariant* user, bool sg_light,
-                                                        double* compile_ms);
+Result<std::shared_ptr<const KernelModule>> KernelSpirv(std::string_view kernel, const shading::UserVariant* user,
+                                                        bool sg_light, double* compile_ms);
 
 // A device shared by every renderer asking for the same options, created on
 // first use and never destroyed: tearing Vulkan down from static destructors

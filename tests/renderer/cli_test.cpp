@@ -5,10 +5,14 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "cli_run.h"
 
@@ -87,6 +91,76 @@ TEST(GpuCli, UserVariantFileRendersAndCompileErrorsNameFileAndLine) {
   EXPECT_EQ(FrameFiles(dir), 0);
   fs::remove(file);
   fs::remove_all(dir);
+}
+
+nlohmann::json NdfJson(const std::string& args) {
+  CliRun r = Shimmer("ndf --json " + args);
+  EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.output;
+  if (r.exit_code != 0) return nlohmann::json::object();
+  return nlohmann::json::parse(r.output);
+}
+
+// `shimmer ndf --variant-file` runs the user's GLSL on the device: the
+// documented tk19 file gives the built-in tk19's numbers, on the device and
+// against the CPU oracle in float, and the 5-tap density filter with
+// fp_max = 0 gives `none`.
+TEST(GpuCli, NdfOfAUserVariantEqualsTheSameFormulaBuiltIn) {
+  const std::string examples = std::string(SHIMMER_SOURCE_DIR) + "/examples/variants/";
+  const std::vector<std::string> points = {
+      "--alpha 0.05 --slope 0.1 0.2 --footprint 0.1 0.05", "--alpha 0.3 0.1 --slope -1.5 0.4 --footprint 0 0",
+      "--alpha 0.01 --slope 3 -2 --footprint 2 0.5 --param sigma2=0.5 --param kappa=0.9",
+      "--ndf beckmann --alpha 0.2 --slope 0.01 0 --footprint 0.02 0.3 --param sigma2=0.1"};
+  for (const std::string& at : points) {
+    const nlohmann::json user = NdfJson("--variant-file " + examples + "tk19_as_user_variant.glsl " + at);
+    const nlohmann::json device = NdfJson("--variant tk19 --on-device " + at);
+    const nlohmann::json cpu = NdfJson("--variant tk19 --precision float " + at);
+    ASSERT_TRUE(user.contains("density")) << at;
+    EXPECT_EQ(user["precision"], "float");
+    EXPECT_EQ(user["params"], cpu["params"]) << at;
+    for (const char* key : {"slope_density", "density"}) {
+      const double u = user[key], d = device[key], c = cpu[key];
+      EXPECT_GT(u, 0) << at;
+      EXPECT_NEAR(u, d, 1e-5 * std::fabs(d)) << key << " " << at;
+      EXPECT_NEAR(u, c, 1e-5 * std::fabs(c)) << key << " " << at;
+    }
+    EXPECT_NEAR(double(user["alpha_eff"][0]), double(cpu["alpha_eff"][0]), 1e-6) << at;
+  }
+  const std::string at = "--alpha 0.1 --slope 0 0 --footprint 0.2 0.2";  // at the peak
+  const nlohmann::json box0 = NdfJson("--variant-file " + examples + "footprint_box_density.glsl --param fp_max=0 " + at);
+  const nlohmann::json none = NdfJson("--variant none --precision float " + at);
+  EXPECT_NEAR(double(box0["density"]), double(none["density"]), 1e-5 * double(none["density"]));
+  const nlohmann::json box = NdfJson("--variant-file " + examples + "footprint_box_density.glsl " + at);
+  EXPECT_LT(double(box["density"]), 0.99 * double(none["density"])) << "a footprint filters the peak down";
+}
+
+TEST(GpuCli, VariantsFileListsDeclaredParametersAndChecksTheFile) {
+  const std::string file = std::string(SHIMMER_SOURCE_DIR) + "/examples/variants/tk19_as_user_variant.glsl";
+  CliRun r = Shimmer("variants --json --file " + file);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  ASSERT_EQ(j.size(), 1u);
+  ASSERT_EQ(j[0]["params"].size(), 2u);
+  EXPECT_EQ(j[0]["params"][0]["name"], "sigma2");
+  EXPECT_EQ(j[0]["params"][0]["default"], 0.25);
+  EXPECT_EQ(j[0]["params"][1]["name"], "kappa");
+  EXPECT_EQ(j[0]["params"][1]["range"], nlohmann::json::array({0, 10000}));
+  const fs::path bad = fs::temp_directory_path() / "shimmer_cli_bad_variant.glsl";
+  {
+    std::ofstream f(bad);
+    f << "// shimmer-param: k = 1 in [0, 2]\nFilteredNdf userVariant(int ndf, vec2 alpha, ShadingFootprint f, "
+         "UserParams p) {\n  return widenedNdf(ndf, f.hpp, alpha * p.q);\n}\n";
+  }
+  ExpectOneClearError(Shimmer("variants --file " + bad.string()), bad.string() + ":3");
+  fs::remove(bad);
+}
+
+TEST(GpuCli, NdfOfAUserVariantRefusesWhatItCannotDo) {
+  const std::string file = std::string(SHIMMER_SOURCE_DIR) + "/examples/variants/tk19_as_user_variant.glsl";
+  ExpectOneClearError(Shimmer("ndf --variant-file " + file + " --precision double"), "--precision double");
+  ExpectOneClearError(Shimmer("ndf --variant-file " + file + " --param fp_max=1"), "has no parameter 'fp_max'");
+  ExpectOneClearError(Shimmer("ndf --variant-file " + file + " --param sigma2=-1"), "parameter sigma2");
+  ExpectOneClearError(Shimmer("ndf --variant-file nope.glsl"), "nope.glsl: no such variant file");
+  ExpectOneClearError(Shimmer("ndf --variant tk19 --variant-file " + file), "give one of them");
 }
 
 TEST(GpuCli, BadInputGetsOneMessageAndNoFrames) {

@@ -165,6 +165,24 @@ struct DeviceDescription {
 // Every Vulkan 1.2 device with a compute queue.
 Result<std::vector<DeviceDescription>> ListDevices();
 
+// One variant's filtered NDF at one footprint, evaluated by one invocation on
+// a Vulkan device, in the device's float (shaders/ndf_probe.comp): how a user
+// variant, which exists only as GLSL, is evaluated as written.
+struct NdfProbe {
+  int variant_id = 0;                               // a catalogue id; ignored when `user` is set
+  std::shared_ptr<const shading::UserVariant> user;  // a variant file, parsed
+  shading::Ndf ndf = shading::Ndf::kGgx;
+  glm::dvec2 alpha{0.1, 0.1};
+  shading::Footprint<double> footprint;
+  shading::Params<double> params;  // in the slots the kernel reads (ResolveUserParams for a file)
+  std::string device;              // substring of the Vulkan device name
+};
+Result<shading::FilteredNdf<double>> ProbeNdf(const NdfProbe& probe);
+
+// Compiles the render kernel with the user's file, without a device: the
+// error names the file and line, as a render would.
+Status CheckUserVariant(const shading::UserVariant& user);
+
 // The source revision compiled in (git describe at configure time).
 std::string SourceRevision();
 

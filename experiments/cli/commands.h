@@ -78,6 +78,10 @@ scene::CameraPath CameraPathOption(const std::string& name);
 
 // "--param name=value" as a (name, value) pair; UsageError for anything else.
 std::pair<std::string, double> ParseParamOption(const std::string& text);
+// The name a --variant-file's variant goes by in a spec, a sweep or a fit:
+// the file's stem, made a valid variant name ("-file" added when it would
+// be a built-in's).
+std::string UserVariantName(const std::string& file);
 
 // Fills db_path and work_dir: the given paths, else runs/<spec>/<db_file> and
 // runs/<spec>/frames; creates their directories in `dirs`.

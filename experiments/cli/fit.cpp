@@ -15,12 +15,23 @@ namespace {
 
 struct FitCliOptions {
   std::string spec, db, work, out, device;
+  std::vector<std::string> variant_files;
   bool keep_frames = false;
 };
 
 void Run(const FitCliOptions& o) {
-  const experiments::Spec spec = Take(experiments::LoadSpec(o.spec));
+  experiments::Spec spec = Take(experiments::LoadSpec(o.spec));
   if (spec.fits.empty()) throw UsageError(o.spec + ": the spec has no \"fit\" section");
+  // Each file joins every fit entry, as if the spec listed it there.
+  for (const std::string& file : o.variant_files) {
+    const std::string name = UserVariantName(file);
+    Take(experiments::AddUserVariant(&spec, file, name));
+    for (experiments::FitConfig& config : spec.fits) {
+      if (Status s = experiments::CheckFitVariant(spec, name, config.param, config.lo, config.hi); !s)
+        throw UsageError("--variant-file " + file + ": " + s.error());
+      config.variants.push_back(name);
+    }
+  }
   // Found before the fits: the report would be lost after hours of renders.
   const std::string out = o.out.empty() ? (std::filesystem::path("results") / spec.name).string() : o.out;
   RequireCreatableDirectory(o.out.empty() ? "the report directory" : "--out", out);
@@ -59,6 +70,8 @@ void AddFitCommand(CLI::App& app) {
   cmd->add_option("-o,--out", o->out, "Report directory (default results/<spec name>)");
   cmd->add_flag("--keep-frames", o->keep_frames, "Keep rendered frames after measuring");
   cmd->add_option("--device", o->device, "Vulkan device name substring");
+  cmd->add_option("--variant-file", o->variant_files,
+                  "Also fit a user variant's GLSL file (docs/variants.md) in every fit entry (repeatable)");
   cmd->callback([o] { Run(*o); });
 }
 

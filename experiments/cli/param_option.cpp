@@ -1,10 +1,12 @@
 // Helpers every subcommand shares: --param values, flag names in library
 // errors, output locations.
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 
 #include "commands.h"
 #include "shimmer/core/directories.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::cli {
 
@@ -55,6 +57,17 @@ void NewDirectories::Create(const std::string& what, const std::filesystem::path
     throw UsageError(what + ": " + blocking.string() + " is not a directory");
   throw CommandError(
       Error{ErrorCode::kIo, what + ": cannot create the directory " + dir.string() + " (" + failure.message() + ")"});
+}
+
+std::string UserVariantName(const std::string& file) {
+  std::string name = std::filesystem::path(file).stem().string();
+  for (char& c : name)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
+  if (name.empty() || name.front() == '.') name = "user" + name;
+  if (name.size() > 64) name.resize(64);
+  // A file called tk19.glsl must not pass for the built-in tk19.
+  if (shading::ParseVariantName(name)) name += "-file";
+  return name;
 }
 
 std::pair<std::string, double> ParseParamOption(const std::string& text) {

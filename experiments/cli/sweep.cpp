@@ -30,6 +30,7 @@ struct SweepOptions {
   std::string csv;
   std::string work = "runs/sweep";
   std::string device;
+  std::string variant_file;
 };
 
 // Builds a one-variant spec and lets the spec parser validate it, so a sweep
@@ -43,14 +44,19 @@ experiments::Spec SweepSpec(const SweepOptions& o, std::string* name) {
   char tail = 0;
   if (std::sscanf(o.param.c_str() + eq + 1, "%lf:%lf:%d%c", &from, &to, &steps, &tail) != 3)
     throw UsageError("--param expects name=from:to:steps, got '" + o.param + "'");
+  nlohmann::json variant = {{"name", o.variant},
+                             {"params",
+                              {{*name, {{"from", from}, {"to", to}, {"steps", steps}, {"scale", o.log ? "log" : "linear"}}}}}};
+  if (!o.variant_file.empty()) {
+    variant["file"] = o.variant_file;
+    variant["name"] = UserVariantName(o.variant_file);
+  }
   nlohmann::json spec = {
       {"name", "sweep"},
       {"scenes", {o.scene}},
       {"materials", {o.material}},
       {"cameras", {o.camera}},
-      {"variants",
-       {{{"name", o.variant},
-         {"params", {{*name, {{"from", from}, {"to", to}, {"steps", steps}, {"scale", o.log ? "log" : "linear"}}}}}}}},
+      {"variants", {variant}},
       {"derivatives", {o.derivatives}},
       {"size", o.size},
       {"frames", o.frames},
@@ -75,6 +81,7 @@ experiments::Spec SweepSpec(const SweepOptions& o, std::string* name) {
                            {"fps:", "--fps:"},
                            {"spp:", "--reference-spp:"},
                            {"derivatives:", "--derivatives:"},
+                           {"file:", "--variant-file:"},
                            {o.variant + ":", "--variant " + o.variant + ":"},
                            {o.camera + ":", "--camera " + o.camera + ":"},
                            {o.material + ":", "--material " + o.material + ":"},
@@ -157,6 +164,8 @@ void AddSweepCommand(CLI::App& app) {
   cmd->add_option("--material", o->material, "Material spec NDF:ALPHA[,...]")->capture_default_str();
   cmd->add_option("--camera", o->camera, "Camera path")->capture_default_str();
   cmd->add_option("--variant", o->variant, "Filter variant whose parameter is swept")->capture_default_str();
+  cmd->add_option("--variant-file", o->variant_file,
+                  "A user variant's GLSL file instead (docs/variants.md); --param sweeps one it declares");
   cmd->add_option("--param", o->param, "name=from:to:steps, e.g. fp_max=0.05:2:12")->required();
   cmd->add_flag("--log", o->log, "Logarithmic steps");
   cmd->add_option("--derivatives", o->derivatives, "quad, quad-coarse or analytic")->capture_default_str();
@@ -167,7 +176,11 @@ void AddSweepCommand(CLI::App& app) {
   cmd->add_option("--csv", o->csv, "Also write the table as CSV, with a gnuplot script and SVG beside it");
   cmd->add_option("--work", o->work, "Frame cache")->capture_default_str();
   cmd->add_option("--device", o->device, "Vulkan device name substring");
-  cmd->callback([o] { Run(*o); });
+  cmd->callback([o, cmd] {
+    if (!o->variant_file.empty() && cmd->count("--variant") > 0)
+      throw UsageError("--variant " + o->variant + " and --variant-file " + o->variant_file + ": give one of them");
+    Run(*o);
+  });
 }
 
 }  // namespace shimmer::cli

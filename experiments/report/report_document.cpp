@@ -4,6 +4,7 @@
 #include <cmath>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "report_document.h"
 #include "shimmer/experiments/output_files.h"
@@ -286,6 +287,23 @@ void SgAccuracySection(Document& doc, const SgAccuracyTable& sg) {
   doc.Figures({stem + ".svg"}, {"SG lighting: energy error against view angle per α, SG warp and ASG warp"});
 }
 
+// Rows whose variant came from a user's file, named once with where the
+// file was and what it held, so that a reader can tell them from the catalogue.
+void UserVariantsSection(Document& doc, const std::vector<Group>& groups) {
+  std::set<std::tuple<std::string, std::string, std::string>> files;
+  for (const Group& g : groups)
+    for (const JobResult* r : g.rows)
+      if (!r->job.variant_hash.empty()) files.insert({r->job.variant, r->job.variant_file, r->job.variant_hash});
+  if (files.empty()) return;
+  doc.Heading(2, "Variants from files");
+  doc.Paragraph(
+      "These variants are users' GLSL files (docs/variants.md), measured like the catalogue's. The content hash is "
+      "part of their job ids: an edited file is measured anew.");
+  std::vector<std::vector<std::string>> cells;
+  for (const auto& [name, file, hash] : files) cells.push_back({Code(name), Code(file), Code(hash)});
+  doc.Table({"variant", "file", "content hash"}, cells);
+}
+
 }  // namespace
 
 void Document::Heading(int level, const std::string& text) {
@@ -329,6 +347,7 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
                 "[report.html](report.html).");
   Overview(doc, groups);
   if (sg) SgAccuracySection(doc, *sg);
+  UserVariantsSection(doc, groups);
   doc.Heading(2, kShotsHeading);
   doc.Paragraph(
       "Ordered by scene, roughness α, camera and derivative source. Values carry their 95 % interval in "

@@ -36,9 +36,7 @@ std::vector<BenchmarkBatch> BenchmarkBatches(const std::vector<Job>& jobs) {
         return b.scene == job.scene && b.derivatives == derivatives;
       });
       if (it == batches.end()) {
-        Job none = job;
-        none.variant = "none";
-        none.params.clear();
+        Job none = AsNone(job);
         none.derivatives = derivatives;
         batches.push_back({job.scene, derivatives, {none}});
         it = batches.end() - 1;
@@ -50,6 +48,8 @@ std::vector<BenchmarkBatch> BenchmarkBatches(const std::vector<Job>& jobs) {
       Job member = it->jobs.front();  // the batch's material, camera and motion
       member.variant = job.variant;
       member.params = job.params;
+      member.variant_file = job.variant_file;
+      member.variant_hash = job.variant_hash;
       it->jobs.push_back(member);
     }
   }

@@ -18,6 +18,7 @@
 #include "shimmer/metrics/metrics_report.h"
 #include "shimmer/renderer/renderer.h"
 #include "shimmer/renderer/scene.h"
+#include "shimmer/renderer/user_variant.h"
 
 namespace shimmer::experiments {
 
@@ -52,10 +53,8 @@ fs::path ReferenceDirectory(const Job& job, const RunOptions& options) {
 }
 
 Result<render::RenderSettings> ReferenceSettings(const Job& job, const RunOptions& options) {
-  auto reference = JobSettings(job, options);
+  auto reference = JobSettings(AsNone(job), options);
   if (!reference) return reference.failure();
-  reference->variant = "none";
-  reference->param_overrides.clear();
   reference->reference_spp = job.reference.spp;
   reference->reference_tolerance = job.reference.tolerance;
   reference->reference_replicates = job.reference.replicates;
@@ -99,6 +98,15 @@ Result<render::RenderSettings> JobSettings(const Job& job, const RunOptions& opt
   s.frames = job.frames;
   s.variant = job.variant;
   s.param_overrides.assign(job.params.begin(), job.params.end());
+  if (!job.variant_hash.empty()) {
+    // The id promised this content: a file edited since the spec was read
+    // would store other numbers under it.
+    auto user = shading::LoadUserVariant(job.variant_file);
+    if (!user) return user.failure();
+    if (user->content_hash != job.variant_hash)
+      return R::Failure(job.variant_file + ": the variant file changed since the spec was read; run again");
+    s.variant_file = job.variant_file;
+  }
   s.derivatives = *derivatives;
   s.device = options.device;
   s.compress_exr = options.keep_frames;  // else measured once and deleted

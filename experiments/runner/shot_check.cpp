@@ -65,9 +65,7 @@ void JudgeConvergence(ShotCheck& c) {
 }
 
 Result<ShotCheck> CheckShot(const Job& shot_job, const RunOptions& options) {
-  Job job = shot_job;
-  job.variant = "none";
-  job.params.clear();
+  const Job job = AsNone(shot_job);
   if (Status s = EnsureReference(job, options); !s) return s.failure();
 
   ShotCheck c;

@@ -11,7 +11,7 @@ namespace shimmer::experiments {
 using nlohmann::json;
 
 json Job::ToJson() const {
-  return {{"scene", scene},
+  json j = {{"scene", scene},
           {"material", material},
           {"camera", camera},
           {"variant", variant},
@@ -27,6 +27,12 @@ json Job::ToJson() const {
           {"highlight_mask", metrics.highlight_mask},
           {"highlight_threshold", metrics.highlight_threshold},
           {"segment", metrics.segment}};
+  // Only user variants carry these: the ids of built-in jobs stay as they were.
+  if (!variant_hash.empty()) {
+    j["variant_file"] = variant_file;
+    j["variant_hash"] = variant_hash;
+  }
+  return j;
 }
 
 Job Job::FromJson(const json& j) {
@@ -48,6 +54,8 @@ Job Job::FromJson(const json& j) {
   job.metrics.highlight_mask = j.at("highlight_mask");
   job.metrics.highlight_threshold = j.at("highlight_threshold");
   job.metrics.segment = j.at("segment");
+  job.variant_file = j.value("variant_file", std::string());
+  job.variant_hash = j.value("variant_hash", std::string());
   return job;
 }
 
@@ -88,7 +96,21 @@ Job SpecJob(const Spec& spec, const std::string& scene, const std::string& mater
   if (auto it = spec.reference_spp_by_material.find(material); it != spec.reference_spp_by_material.end())
     job.reference.spp = it->second;
   job.metrics = spec.metrics;
+  if (auto it = spec.user_variants.find(variant); it != spec.user_variants.end()) {
+    job.variant_file = it->second.file;
+    job.variant_hash = it->second.hash;
+    for (const auto& [name, value] : it->second.defaults) job.params.emplace(name, value);
+  }
   return job;
+}
+
+Job AsNone(const Job& job) {
+  Job none = job;
+  none.variant = "none";
+  none.params.clear();
+  none.variant_file.clear();
+  none.variant_hash.clear();
+  return none;
 }
 
 bool ReadsDerivatives(const std::string& variant) {
@@ -159,6 +181,7 @@ std::string JobId(const Job& job) { return JobIdForCore(job, ShadingCoreVersion(
 std::string JobIdForCore(const Job& job, std::string_view core_version) {
   json j = job.ToJson();
   j["core"] = core_version;
+  j.erase("variant_file");  // where the file is moves no number; its content (variant_hash) does
   // Defaults live in the C++ catalogue, not in the GLSL the core version
   // hashes: the id holds every parameter the variant reads, resolved, so a
   // default spelled out in a spec is the same job and a changed default is not.

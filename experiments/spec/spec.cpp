@@ -16,6 +16,7 @@
 #include "shimmer/renderer/renderer.h"
 #include "shimmer/renderer/scene.h"
 #include "shimmer/renderer/shading.h"
+#include "shimmer/renderer/user_variant.h"
 
 namespace shimmer::experiments {
 
@@ -32,6 +33,13 @@ struct SpecError {
   // message shows `label` ("groups[0].variants: k16-nope") instead of it.
   int group = -1;
   std::string label = {};
+};
+
+// What parsing variants needs besides the JSON: where variant files are
+// looked for, and the spec whose user variants they join.
+struct VariantContext {
+  std::filesystem::path base;  // the spec's folder
+  Spec* spec;
 };
 
 // The 1-based line of offset `pos` in the text.
@@ -219,20 +227,52 @@ std::vector<double> ParameterValues(const json& j, const std::string& key) {
   return out;
 }
 
-VariantSweep ParseVariant(const json& j) {
+// {"file", "name", "params"}: the file registered under its name, each
+// parameter value checked against the file's declared range.
+VariantSweep ParseUserVariantEntry(const json& j, const VariantContext& ctx, VariantSweep v) {
+  if (!j["file"].is_string() || j["file"].get<std::string>().empty())
+    throw SpecError{"file", "must be the path of a variant GLSL file (relative to the spec)"};
+  const std::filesystem::path file(j["file"].get<std::string>());
+  const std::string path = (file.is_absolute() ? file : ctx.base / file).lexically_normal().string();
+  auto ref = AddUserVariant(ctx.spec, path, v.name);
+  if (!ref) throw SpecError{"file", ref.error()};
+  for (const auto& [name, values] : v.params) {
+    const auto range = ref->ranges.find(name);
+    if (range == ref->ranges.end()) {
+      std::string list;
+      for (const auto& [declared, value] : ref->defaults) list += (list.empty() ? "" : ", ") + declared;
+      throw SpecError{name, path + " has no parameter '" + name + "'" +
+                                (list.empty() ? " (it declares none)" : " (it declares: " + list + ")")};
+    }
+    for (double x : values)
+      if (x < range->second.first || x > range->second.second)
+        throw SpecError{name, "parameter " + name + " of " + path + " must be >= " +
+                                  NumberText(range->second.first) + " and <= " + NumberText(range->second.second) +
+                                  ", got " + NumberText(x)};
+  }
+  return v;
+}
+
+VariantSweep ParseVariant(const json& j, const VariantContext& ctx) {
   VariantSweep v;
   if (j.is_string()) {
     v.name = j.get<std::string>();
   } else if (j.is_object()) {
-    RejectUnknownKeys(j, {"name", "params"}, "a variant");
+    RejectUnknownKeys(j, {"name", "params", "file"}, "a variant");
     if (!j.contains("name") || !j["name"].is_string()) throw SpecError{"variants", "each variant needs a \"name\""};
     v.name = j["name"].get<std::string>();
     if (j.contains("params")) {
       if (!j["params"].is_object()) throw SpecError{"params", "must be an object of parameter values"};
       for (const auto& [name, values] : j["params"].items()) v.params[name] = ParameterValues(values, name);
     }
+    if (j.contains("file")) return ParseUserVariantEntry(j, ctx, std::move(v));
   } else {
-    throw SpecError{"variants", "entries must be a name or {\"name\", \"params\"}"};
+    throw SpecError{"variants", "entries must be a name, {\"name\", \"params\"} or {\"file\", \"name\", \"params\"}"};
+  }
+  if (ctx.spec->user_variants.count(v.name)) {
+    if (!v.params.empty())
+      throw SpecError{v.name, "a variant file's parameters are given where the file is (its {\"file\", \"name\", \"params\"} entry)"};
+    return v;  // named again, e.g. in a group
   }
   const auto parsed = shading::ParseVariantName(v.name);
   if (!parsed) throw SpecError{v.name, parsed.error()};
@@ -251,17 +291,17 @@ VariantSweep ParseVariant(const json& j) {
   return v;
 }
 
-std::vector<VariantSweep> Variants(const json& j) {
+std::vector<VariantSweep> Variants(const json& j, const VariantContext& ctx) {
   if (!j.is_array() || j.empty()) throw SpecError{"variants", "must be a non-empty array"};
   std::vector<VariantSweep> variants;
-  for (const json& v : j) variants.push_back(ParseVariant(v));
+  for (const json& v : j) variants.push_back(ParseVariant(v, ctx));
   return variants;
 }
 
 constexpr const char* kGroupKeys = "cameras, derivatives, materials, scenes, variants";
 
 // groups[index]: the keys it has replace the top level's.
-ShotGroup ParseGroup(const json& g, int index, const ShotGroup& top) {
+ShotGroup ParseGroup(const json& g, int index, const ShotGroup& top, const VariantContext& ctx) {
   return InGroup(index, "", [&] {
     if (!g.is_object()) throw SpecError{"", std::string("must be an object with any of: ") + kGroupKeys};
     RejectUnknownKeys(g, {"scenes", "materials", "cameras", "variants", "derivatives"}, "");
@@ -272,7 +312,8 @@ ShotGroup ParseGroup(const json& g, int index, const ShotGroup& top) {
     if (g.contains("scenes")) out.scenes = InGroup(index, "scenes", [&] { return Scenes(g["scenes"]); });
     if (g.contains("materials")) out.materials = InGroup(index, "materials", [&] { return Materials(g["materials"]); });
     if (g.contains("cameras")) out.cameras = InGroup(index, "cameras", [&] { return Cameras(g["cameras"]); });
-    if (g.contains("variants")) out.variants = InGroup(index, "variants", [&] { return Variants(g["variants"]); });
+    if (g.contains("variants"))
+      out.variants = InGroup(index, "variants", [&] { return Variants(g["variants"], ctx); });
     if (g.contains("derivatives"))
       out.derivatives = InGroup(index, "derivatives", [&] { return DerivativeSources(g["derivatives"]); });
     return out;
@@ -309,23 +350,6 @@ FitConfig ParseFit(const json& f, const Spec& spec) {
   if (!f["param"].is_string()) throw SpecError{"param", "must be a parameter name"};
   c.param = f["param"];
   c.variants = StringList(f["variants"], "variants");
-  for (const std::string& name : c.variants) {
-    const shading::VariantInfo* info = shading::FindVariant(name);
-    if (!info) throw SpecError{name, "unknown variant (see `shimmer variants`); fits take catalogue variants"};
-    std::string names;
-    bool has = false;
-    for (const shading::ParamInfo& p : info->params) {
-      has = has || p.name == c.param;
-      names += (names.empty() ? "" : ", ") + std::string(p.name);
-    }
-    if (!has)
-      throw SpecError{name, "has no parameter \"" + c.param +
-                                "\" to fit (its parameters: " + (names.empty() ? "none" : names) + ")"};
-    if (info->ggx_only)
-      for (const std::string& m : spec.materials)
-        if (scene::ParseMaterial(m, {})->ndf != shading::Ndf::kGgx)
-          throw SpecError{name, "takes GGX materials only, and the spec lists " + m};
-  }
   if (f.contains("bounds")) {
     const json& b = f["bounds"];
     if (!b.is_array() || b.size() != 2) throw SpecError{"bounds", "must be [lo, hi]"};
@@ -336,7 +360,8 @@ FitConfig ParseFit(const json& f, const Spec& spec) {
   if (!(c.lo > 0 && c.lo < c.hi))
     throw SpecError{"bounds", "are empty or not positive: need 0 < lo < hi, found [" + NumberText(c.lo) + ", " +
                                   NumberText(c.hi) + "]"};
-  if (Status s = shading::ValidateParam(c.param, c.hi); !s) throw SpecError{"bounds", s.error()};
+  for (const std::string& name : c.variants)
+    if (Status s = CheckFitVariant(spec, name, c.param, c.lo, c.hi); !s) throw SpecError{name, s.error()};
   if (f.contains("sweep_points")) c.sweep_points = PositiveInt(f["sweep_points"], "sweep_points", kMaxSweepPoints);
   if (c.sweep_points < 2) throw SpecError{"sweep_points", "must be at least 2"};
   if (f.contains("defaults")) {
@@ -362,7 +387,7 @@ FitConfig ParseFit(const json& f, const Spec& spec) {
   return c;
 }
 
-Spec ParseSpecObject(const json& j) {
+Spec ParseSpecObject(const json& j, const std::filesystem::path& base) {
   if (!j.is_object()) throw SpecError{"", "a spec is a JSON object"};
   RejectUnknownKeys(j,
                     {"name", "scenes", "materials", "cameras", "variants", "derivatives", "groups", "size", "frames",
@@ -377,14 +402,15 @@ Spec ParseSpecObject(const json& j) {
   s.scenes = Scenes(j["scenes"]);
   s.materials = Materials(j["materials"]);
   s.cameras = Cameras(j["cameras"]);
-  s.variants = Variants(j["variants"]);
+  const VariantContext ctx{base, &s};
+  s.variants = Variants(j["variants"], ctx);
   if (j.contains("derivatives")) s.derivatives = DerivativeSources(j["derivatives"]);
   if (j.contains("groups")) {
     const json& g = j["groups"];
     if (!g.is_array() || g.empty())
       throw SpecError{"groups", std::string("must be a non-empty list of objects with any of: ") + kGroupKeys};
     const ShotGroup top = AllGroups(s).front();
-    for (std::size_t i = 0; i < g.size(); ++i) s.groups.push_back(ParseGroup(g[i], int(i), top));
+    for (std::size_t i = 0; i < g.size(); ++i) s.groups.push_back(ParseGroup(g[i], int(i), top, ctx));
   }
   if (j.contains("size")) {
     const json& size = j["size"];
@@ -507,7 +533,7 @@ Result<Spec> ParseSpec(std::string_view text, const std::string& source) {
   auto j = ParseJson(text, source);
   if (!j) return j.failure();
   try {
-    return ParseSpecObject(*j);
+    return ParseSpecObject(*j, std::filesystem::path(source).parent_path());
   } catch (const SpecError& e) {
     // In a group, the key is looked for from the group on, and the group's
     // own line stands in when it is not found there.
@@ -530,6 +556,69 @@ std::vector<ShotGroup> AllGroups(const Spec& spec) {
   std::vector<ShotGroup> all{{spec.scenes, spec.materials, spec.cameras, spec.variants, spec.derivatives}};
   all.insert(all.end(), spec.groups.begin(), spec.groups.end());
   return all;
+}
+
+Result<UserVariantRef> AddUserVariant(Spec* spec, const std::string& path, const std::string& name) {
+  using R = Result<UserVariantRef>;
+  // The name labels report rows and plot keys, so it is held to what a spec name may be.
+  if (name.empty() || name.size() > 64 || name.front() == '.' ||
+      name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789._-") != std::string::npos)
+    return R::Failure("variant file name '" + name + "': must be 1 to 64 letters, digits, '.', '_' or '-'");
+  if (shading::ParseVariantName(name))
+    return R::Failure("'" + name + "' is a built-in variant's name; give the variant file " + path + " its own");
+  auto user = shading::LoadUserVariant(path);
+  if (!user) return user.failure();
+  if (Status compiled = render::CheckUserVariant(*user); !compiled) return compiled.failure();
+  UserVariantRef ref;
+  ref.file = path;
+  ref.hash = user->content_hash;
+  ref.summary = user->summary;
+  for (const shading::UserParam& p : user->params) {
+    ref.defaults[p.name] = p.default_value;
+    ref.ranges[p.name] = {p.lo, p.hi};
+  }
+  if (auto it = spec->user_variants.find(name); it != spec->user_variants.end()) {
+    if (it->second.file != ref.file || it->second.hash != ref.hash)
+      return R::Failure("two variant files are named '" + name + "': " + it->second.file + " and " + path);
+    return it->second;
+  }
+  spec->user_variants[name] = ref;
+  return ref;
+}
+
+Status CheckFitVariant(const Spec& spec, const std::string& variant, const std::string& param, double lo,
+                       double hi) {
+  std::string names;
+  if (auto it = spec.user_variants.find(variant); it != spec.user_variants.end()) {
+    const auto range = it->second.ranges.find(param);
+    for (const auto& [name, value] : it->second.defaults) names += (names.empty() ? "" : ", ") + name;
+    if (range == it->second.ranges.end())
+      return Status::Failure("has no parameter \"" + param + "\" to fit (" + it->second.file + " declares " +
+                             (names.empty() ? "none" : names) + ")");
+    if (lo < range->second.first || hi > range->second.second)
+      return Status::Failure("the bounds [" + NumberText(lo) + ", " + NumberText(hi) + "] leave " + param +
+                             "'s declared range [" + NumberText(range->second.first) + ", " +
+                             NumberText(range->second.second) + "] in " + it->second.file);
+    return Ok();
+  }
+  const shading::VariantInfo* info = shading::FindVariant(variant);
+  if (!info)
+    return Status::Failure(
+        "unknown variant (see `shimmer variants`); fits take catalogue variants and the spec's variant files");
+  bool has = false;
+  for (const shading::ParamInfo& p : info->params) {
+    has = has || p.name == param;
+    names += (names.empty() ? "" : ", ") + std::string(p.name);
+  }
+  if (!has)
+    return Status::Failure("has no parameter \"" + param + "\" to fit (its parameters: " +
+                           (names.empty() ? "none" : names) + ")");
+  if (Status s = shading::ValidateParam(param, hi); !s) return Status::Failure("bounds: " + s.error());
+  if (info->ggx_only)
+    for (const std::string& m : spec.materials)
+      if (scene::ParseMaterial(m, {})->ndf != shading::Ndf::kGgx)
+        return Status::Failure("takes GGX materials only, and the spec lists " + m);
+  return Ok();
 }
 
 Result<Spec> LoadSpec(const std::string& path) {

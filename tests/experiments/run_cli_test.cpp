@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -265,6 +266,96 @@ TEST(FitCli, FittedValueBeatsBothDefaultsOnItsObjective) {
   const auto rows = *(*store)->Fits();
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0]["value"], fit["value"]);
+}
+
+// A user's file beside the built-in variants: it runs, resumes without
+// recomputing, is reported with its file, and the documented tk19 file
+// measures exactly what the built-in tk19 does.
+TEST(UserVariantCli, ASpecWithAVariantFileRunsResumesAndReports) {
+  Workspace ws;
+  fs::copy_file(fs::path(SHIMMER_SOURCE_DIR) / "examples/variants/tk19_as_user_variant.glsl", ws.dir / "mine.glsl");
+  std::ofstream(ws.dir / "user.json") << R"({
+    "name": "user", "scenes": ["sphere-field"], "materials": ["ggx:0.05"], "cameras": ["orbit"],
+    "variants": ["none", "tk19", {"file": "mine.glsl", "name": "mine", "params": {"sigma2": [0.25, 0.05]}}],
+    "size": [24, 24], "frames": 4, "reference": {"spp": 2, "replicates": 2},
+    "benchmark": {"size": [32, 32], "repetitions": 2}
+  })";
+  const std::string cd = "cd " + ws.dir.string() + " && " + SHIMMER_EXE;
+  ASSERT_EQ(std::system((cd + " run user.json --db u.db --work frames >>log.txt 2>&1").c_str()), 0)
+      << ReadText(ws.dir / "log.txt");
+  const auto rows = Rows(ws.dir / "u.db");
+  ASSERT_EQ(rows.size(), 4u);
+  auto store = ResultStore::Open((ws.dir / "u.db").string(), ResultStore::Mode::kReadOnly);
+  ASSERT_TRUE(store) << store.error();
+  const std::vector<JobResult> all = *(*store)->All();
+  const JobResult *builtin = nullptr, *mine = nullptr;
+  for (const JobResult& r : all) {
+    if (r.job.variant == "tk19") builtin = &r;
+    if (r.job.variant == "mine" && r.job.params.at("sigma2") == 0.25) mine = &r;
+  }
+  ASSERT_TRUE(builtin && mine);
+  EXPECT_EQ(mine->job.params.at("kappa"), 0.18);  // the declared default, in the job
+  EXPECT_FALSE(mine->job.variant_hash.empty());
+  for (const char* key : {"tv_err", "energy_bias", "relmse", "tv_ratio"})
+    EXPECT_DOUBLE_EQ(mine->metrics[key].get<double>(), builtin->metrics[key].get<double>()) << key;
+  // Resumed: nothing is computed again.
+  ASSERT_EQ(std::system((cd + " run user.json --db u.db --work frames >resume.txt 2>&1").c_str()), 0);
+  EXPECT_NE(ReadText(ws.dir / "resume.txt").find("(0 computed, 4 already done)"), std::string::npos)
+      << ReadText(ws.dir / "resume.txt");
+  ASSERT_EQ(std::system((cd + " report u.db -o report >>log.txt 2>&1").c_str()), 0);
+  const std::string md = ReadText(ws.dir / "report" / "report.md");
+  EXPECT_NE(md.find("## Variants from files"), std::string::npos);
+  EXPECT_NE(md.find("`mine kappa=0.18 sigma2=0.25`"), std::string::npos) << md;
+  EXPECT_NE(md.find("`mine.glsl`"), std::string::npos);
+  // An edited file is new work, measured anew.
+  std::ofstream(ws.dir / "mine.glsl", std::ios::app) << "// edited\n";
+  ASSERT_EQ(std::system((cd + " run user.json --db u.db --work frames >edited.txt 2>&1").c_str()), 0);
+  EXPECT_NE(ReadText(ws.dir / "edited.txt").find("(2 computed, 2 already done)"), std::string::npos)
+      << ReadText(ws.dir / "edited.txt");
+}
+
+// A sweep and a fit of a parameter the file declares: the 5-tap footprint
+// box with fp_max = 4 (far past where the box overshoots the highlight) is
+// the bad default the fit must beat.
+TEST(UserVariantCli, SweepAndFitAFileVariantsParameter) {
+  Workspace ws;
+  const std::string file = (fs::path(SHIMMER_SOURCE_DIR) / "examples/variants/footprint_box_density.glsl").string();
+  const std::string cd = "cd " + ws.dir.string() + " && " + SHIMMER_EXE;
+  ASSERT_EQ(std::system((cd + " sweep --variant-file " + file +
+                         " --param fp_max=0:2:3 --size 24 24 --frames 4 --reference-spp 2 --csv s.csv >>log.txt 2>&1")
+                            .c_str()),
+            0)
+      << ReadText(ws.dir / "log.txt");
+  const std::string csv = ReadText(ws.dir / "s.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4) << csv;  // header and 3 values
+  std::ofstream(ws.dir / "fit.json") << R"({
+    "name": "userfit", "scenes": ["sphere-field"], "materials": ["ggx:0.02"], "cameras": ["orbit"],
+    "variants": ["none"], "size": [32, 32], "frames": 6, "reference": {"spp": 3},
+    "fit": {"variants": ["none"], "param": "fp_max", "bounds": [0.01, 4], "sweep_points": 5, "defaults": [4],
+            "train": {"scenes": ["sphere-field"], "cameras": ["orbit"]},
+            "validate": {"scenes": ["sphere-field"], "cameras": ["pan"]}}
+  })";
+  // `none` has no fp_max: the spec alone is refused; the file joins the fit.
+  ASSERT_NE(std::system((cd + " fit fit.json --db f.db --work frames -o r >>log.txt 2>&1").c_str()), 0);
+  std::ofstream(ws.dir / "fit.json", std::ios::trunc) << R"({
+    "name": "userfit", "scenes": ["sphere-field"], "materials": ["ggx:0.02"], "cameras": ["orbit"],
+    "variants": ["none"], "size": [32, 32], "frames": 6, "reference": {"spp": 3},
+    "fit": {"variants": ["k16-beckmann-rect"], "param": "fp_max", "bounds": [0.01, 4], "sweep_points": 5,
+            "defaults": [4], "train": {"scenes": ["sphere-field"], "cameras": ["orbit"]},
+            "validate": {"scenes": ["sphere-field"], "cameras": ["pan"]}}
+  })";
+  ASSERT_EQ(std::system((cd + " fit fit.json --variant-file " + file + " --db f.db --work frames -o r >>log.txt 2>&1")
+                            .c_str()),
+            0)
+      << ReadText(ws.dir / "log.txt");
+  const nlohmann::json report = nlohmann::json::parse(ReadText(ws.dir / "r" / "fit.json"));
+  const nlohmann::json* fit = nullptr;
+  for (const nlohmann::json& f : report["fits"])
+    if (f["variant"] == "footprint_box_density") fit = &f;
+  ASSERT_TRUE(fit) << report.dump();
+  const double j = (*fit)["train"]["j"];
+  ASSERT_EQ((*fit)["defaults"].size(), 1u);
+  EXPECT_LT(j, (*fit)["defaults"][0]["train"]["j"].get<double>()) << "fp_max = " << (*fit)["value"];
 }
 
 TEST(FitCli, BadFitConfigurationIsRejectedBeforeAnyWork) {

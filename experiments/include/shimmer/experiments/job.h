@@ -25,6 +25,9 @@ struct Job {
   std::string variant;
   std::map<std::string, double> params;  // only the values the spec sweeps; defaults are implied by the core version
   std::string derivatives;
+  // A user variant: its file (not part of the id: the content is) and the
+  // hash of its content. Its params hold every declared parameter.
+  std::string variant_file, variant_hash;
   int width = 0, height = 0, frames = 0;
   double fps = 0;
   ReferenceQuality reference;
@@ -34,9 +37,14 @@ struct Job {
   static Job FromJson(const nlohmann::json& j);
 };
 
-// One job of the spec's resolution, frames, reference and metric options.
+// One job of the spec's resolution, frames, reference and metric options; a
+// user variant's job gets its file and the declared defaults of the
+// parameters `params` leaves out.
 Job SpecJob(const Spec& spec, const std::string& scene, const std::string& material, const std::string& camera,
             const std::string& variant, const std::map<std::string, double>& params, const std::string& derivatives);
+
+// The same shot and options with variant `none`: no parameters, no file.
+Job AsNone(const Job& job);
 
 // False for `none` and `supersample-N`: their pixels never read the
 // derivatives, so one derivative source stands for all.

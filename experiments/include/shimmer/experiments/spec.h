@@ -19,6 +19,18 @@ struct VariantSweep {
   std::map<std::string, std::vector<double>> params;
 };
 
+// A user's variant file named in a spec (variant entry {"file", "name",
+// "params"}): the file as resolved against the spec's folder, the hash of its
+// content (job ids hash it, so an edited file is new work) and the
+// parameters it declares (docs/variants.md).
+struct UserVariantRef {
+  std::string file;
+  std::string hash;
+  std::string summary;
+  std::map<std::string, double> defaults;
+  std::map<std::string, std::pair<double, double>> ranges;  // [lo, hi] per parameter
+};
+
 // How much a shot's metrics of `none` may move when the reference doubles
 // its samples per axis before the shot is called unconverged.
 struct ConvergenceTolerance {
@@ -105,7 +117,18 @@ struct Spec {
   MetricOptions metrics;
   BenchmarkOptions benchmark;
   std::vector<FitConfig> fits;  // the `fit` section: one object or a list
+  // User variants by the name their entries give them (in any group).
+  std::map<std::string, UserVariantRef> user_variants;
 };
+
+// Loads `path`, checks that it compiles as a variant and registers it as
+// `name` (a file's name must not be a built-in variant's, nor another
+// file's). The error names the file, and its line where the file is wrong.
+Result<UserVariantRef> AddUserVariant(Spec* spec, const std::string& path, const std::string& name);
+// What a fit of `param` in [lo, hi] needs of `variant` (a catalogue name or
+// one of spec.user_variants): that it has the parameter, the bounds lie in
+// its range, and it shades every material of the spec. Empty when it does.
+Status CheckFitVariant(const Spec& spec, const std::string& variant, const std::string& param, double lo, double hi);
 
 // The top-level cross product, then each of spec.groups: every group of
 // shots a spec's jobs come from (ExpandJobs).
@@ -118,7 +141,8 @@ inline constexpr int kMaxRangeSteps = 10000;
 inline constexpr int kMaxSpecFrames = 4096;
 
 // `source` names the text in messages (usually the file name); errors read
-// "<source>:<line>: <key>: <problem>".
+// "<source>:<line>: <key>: <problem>". Variant files are looked for relative
+// to the folder of `source`.
 Result<Spec> ParseSpec(std::string_view json_text, const std::string& source);
 Result<Spec> LoadSpec(const std::string& path);
 

@@ -78,6 +78,9 @@ scene::CameraPath CameraPathOption(const std::string& name);
 
 // "--param name=value" as a (name, value) pair; UsageError for anything else.
 std::pair<std::string, double> ParseParamOption(const std::string& text);
+// --variant and --variant-file both given on `cmd`: a UsageError.
+void RequireOneFilter(const CLI::App& cmd, const std::string& variant, const std::string& variant_file);
+
 // The name a --variant-file's variant goes by in a spec, a sweep or a fit:
 // the file's stem, made a valid variant name ("-file" added when it would
 // be a built-in's).

@@ -27,7 +27,6 @@ struct NdfOptions {
   std::vector<double> footprint{0, 0};
   std::string precision;  // default: double on the CPU, float on the device
   std::string variant_file;
-  bool variant_given = false;
   bool on_device = false;
   std::string device;
   std::vector<std::string> params;
@@ -86,8 +85,6 @@ shading::FilteredNdf<double> Evaluate(const shading::VariantInfo& info, shading:
 
 void Run(const NdfOptions& o) {
   const bool user = !o.variant_file.empty();
-  if (user && o.variant_given)
-    throw UsageError("--variant " + o.variant + " and --variant-file " + o.variant_file + ": give one of them");
   const bool on_device = user || o.on_device;
   const std::string precision = !o.precision.empty() ? o.precision : on_device ? "float" : "double";
   if (precision != "float" && precision != "double")
@@ -186,7 +183,7 @@ void AddNdfCommand(CLI::App& app) {
   cmd->add_option("--param", o->params, "Variant parameter name=value (repeatable)");
   cmd->add_flag("--json", o->json, "Print one JSON object");
   cmd->callback([o, cmd] {
-    o->variant_given = cmd->count("--variant") > 0;
+    RequireOneFilter(*cmd, o->variant, o->variant_file);
     Run(*o);
   });
 }

@@ -59,6 +59,11 @@ void NewDirectories::Create(const std::string& what, const std::filesystem::path
       Error{ErrorCode::kIo, what + ": cannot create the directory " + dir.string() + " (" + failure.message() + ")"});
 }
 
+void RequireOneFilter(const CLI::App& cmd, const std::string& variant, const std::string& variant_file) {
+  if (!variant_file.empty() && cmd.count("--variant") > 0)
+    throw UsageError("--variant " + variant + " and --variant-file " + variant_file + " both name the filter; give one");
+}
+
 std::string UserVariantName(const std::string& file) {
   std::string name = std::filesystem::path(file).stem().string();
   for (char& c : name)

@@ -66,9 +66,7 @@ void Run(const RenderOptions& o, const CLI::App& cmd) {
                   d.quad_ops ? ", quad ops" : "");
     return;
   }
-  if (!o.variant_file.empty() && cmd.count("--variant") > 0)
-    throw UsageError("--variant " + o.variant + " and --variant-file " + o.variant_file +
-                     " both name the filter; give one");
+  RequireOneFilter(cmd, o.variant, o.variant_file);
   render::RenderSettings s;
   s.scene = Take(scene::LoadScene(o.scene), {{"unknown scene", "--scene: unknown scene"}});
   s.material = s.scene.material;

@@ -177,8 +177,7 @@ void AddSweepCommand(CLI::App& app) {
   cmd->add_option("--work", o->work, "Frame cache")->capture_default_str();
   cmd->add_option("--device", o->device, "Vulkan device name substring");
   cmd->callback([o, cmd] {
-    if (!o->variant_file.empty() && cmd->count("--variant") > 0)
-      throw UsageError("--variant " + o->variant + " and --variant-file " + o->variant_file + ": give one of them");
+    RequireOneFilter(*cmd, o->variant, o->variant_file);
     Run(*o);
   });
 }

@@ -97,9 +97,9 @@ Job SpecJob(const Spec& spec, const std::string& scene, const std::string& mater
     job.reference.spp = it->second;
   job.metrics = spec.metrics;
   if (auto it = spec.user_variants.find(variant); it != spec.user_variants.end()) {
-    job.variant_file = it->second.file;
-    job.variant_hash = it->second.hash;
-    for (const auto& [name, value] : it->second.defaults) job.params.emplace(name, value);
+    job.variant_file = it->second->file;
+    job.variant_hash = it->second->content_hash;
+    for (const shading::UserParam& p : it->second->params) job.params.emplace(p.name, p.default_value);
   }
   return job;
 }

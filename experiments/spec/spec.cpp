@@ -236,20 +236,12 @@ VariantSweep ParseUserVariantEntry(const json& j, const VariantContext& ctx, Var
   const std::string path = (file.is_absolute() ? file : ctx.base / file).lexically_normal().string();
   auto ref = AddUserVariant(ctx.spec, path, v.name);
   if (!ref) throw SpecError{"file", ref.error()};
-  for (const auto& [name, values] : v.params) {
-    const auto range = ref->ranges.find(name);
-    if (range == ref->ranges.end()) {
-      std::string list;
-      for (const auto& [declared, value] : ref->defaults) list += (list.empty() ? "" : ", ") + declared;
-      throw SpecError{name, path + " has no parameter '" + name + "'" +
-                                (list.empty() ? " (it declares none)" : " (it declares: " + list + ")")};
+  for (const auto& [name, values] : v.params)
+    for (double x : values) {
+      const std::pair<std::string, double> value{name, x};
+      if (auto resolved = shading::ResolveUserParams(**ref, std::span(&value, 1)); !resolved)
+        throw SpecError{name, resolved.error()};
     }
-    for (double x : values)
-      if (x < range->second.first || x > range->second.second)
-        throw SpecError{name, "parameter " + name + " of " + path + " must be >= " +
-                                  NumberText(range->second.first) + " and <= " + NumberText(range->second.second) +
-                                  ", got " + NumberText(x)};
-  }
   return v;
 }
 
@@ -568,20 +560,14 @@ Result<UserVariantRef> AddUserVariant(Spec* spec, const std::string& path, const
     return R::Failure("'" + name + "' is a built-in variant's name; give the variant file " + path + " its own");
   auto user = shading::LoadUserVariant(path);
   if (!user) return user.failure();
+  const auto it = spec->user_variants.find(name);
+  const bool same = it != spec->user_variants.end() && it->second->file == user->file &&
+                    it->second->content_hash == user->content_hash;
+  if (same) return it->second;  // compiled when it was first named
   if (Status compiled = render::CheckUserVariant(*user); !compiled) return compiled.failure();
-  UserVariantRef ref;
-  ref.file = path;
-  ref.hash = user->content_hash;
-  ref.summary = user->summary;
-  for (const shading::UserParam& p : user->params) {
-    ref.defaults[p.name] = p.default_value;
-    ref.ranges[p.name] = {p.lo, p.hi};
-  }
-  if (auto it = spec->user_variants.find(name); it != spec->user_variants.end()) {
-    if (it->second.file != ref.file || it->second.hash != ref.hash)
-      return R::Failure("two variant files are named '" + name + "': " + it->second.file + " and " + path);
-    return it->second;
-  }
+  if (it != spec->user_variants.end())
+    return R::Failure("two variant files are named '" + name + "': " + it->second->file + " and " + path);
+  UserVariantRef ref = std::make_shared<const shading::UserVariant>(std::move(*user));
   spec->user_variants[name] = ref;
   return ref;
 }
@@ -590,15 +576,16 @@ Status CheckFitVariant(const Spec& spec, const std::string& variant, const std::
                        double hi) {
   std::string names;
   if (auto it = spec.user_variants.find(variant); it != spec.user_variants.end()) {
-    const auto range = it->second.ranges.find(param);
-    for (const auto& [name, value] : it->second.defaults) names += (names.empty() ? "" : ", ") + name;
-    if (range == it->second.ranges.end())
-      return Status::Failure("has no parameter \"" + param + "\" to fit (" + it->second.file + " declares " +
+    const shading::UserVariant& user = *it->second;
+    for (const shading::UserParam& p : user.params) names += (names.empty() ? "" : ", ") + p.name;
+    const shading::UserParam* p = shading::FindUserParam(user, param);
+    if (!p)
+      return Status::Failure("has no parameter \"" + param + "\" to fit (" + user.file + " declares " +
                              (names.empty() ? "none" : names) + ")");
-    if (lo < range->second.first || hi > range->second.second)
+    if (lo < p->lo || hi > p->hi)
       return Status::Failure("the bounds [" + NumberText(lo) + ", " + NumberText(hi) + "] leave " + param +
-                             "'s declared range [" + NumberText(range->second.first) + ", " +
-                             NumberText(range->second.second) + "] in " + it->second.file);
+                             "'s declared range [" + NumberText(p->lo) + ", " + NumberText(p->hi) + "] in " +
+                             user.file);
     return Ok();
   }
   const shading::VariantInfo* info = shading::FindVariant(variant);

@@ -48,17 +48,18 @@ TEST(UserVariantSpec, AFileEntryExpandsToJobsWithTheFileAndEveryDeclaredParamete
   auto spec = f.Parse(R"(["none", {"file": "../mine.glsl", "name": "mine", "params": {"k": [0.25, 1]}}])");
   ASSERT_TRUE(spec.ok()) << spec.error();
   ASSERT_EQ(spec->user_variants.count("mine"), 1u);
-  const UserVariantRef& ref = spec->user_variants.at("mine");
+  const shading::UserVariant& ref = *spec->user_variants.at("mine");
   EXPECT_EQ(ref.file, (f.dir / "specs" / ".." / "mine.glsl").lexically_normal().string());
   EXPECT_EQ(ref.summary, "widens alpha by k");
-  EXPECT_EQ(ref.defaults.at("k"), 0.5);
+  ASSERT_NE(shading::FindUserParam(ref, "k"), nullptr);
+  EXPECT_EQ(shading::FindUserParam(ref, "k")->default_value, 0.5);
   const std::vector<Job> jobs = ExpandJobs(*spec);
   ASSERT_EQ(jobs.size(), 3u);
   EXPECT_EQ(jobs[1].variant, "mine");
   EXPECT_EQ(jobs[1].params.at("k"), 0.25);
   EXPECT_EQ(jobs[2].params.at("k"), 1);
   EXPECT_EQ(jobs[1].variant_file, ref.file);
-  EXPECT_EQ(jobs[1].variant_hash, ref.hash);
+  EXPECT_EQ(jobs[1].variant_hash, ref.content_hash);
   EXPECT_TRUE(ReadsDerivatives(jobs[1].variant));
   EXPECT_TRUE(jobs[0].variant_hash.empty());
   // The job round-trips through the store's JSON with its file.

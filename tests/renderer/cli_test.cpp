@@ -160,7 +160,7 @@ TEST(GpuCli, NdfOfAUserVariantRefusesWhatItCannotDo) {
   ExpectOneClearError(Shimmer("ndf --variant-file " + file + " --param fp_max=1"), "has no parameter 'fp_max'");
   ExpectOneClearError(Shimmer("ndf --variant-file " + file + " --param sigma2=-1"), "parameter sigma2");
   ExpectOneClearError(Shimmer("ndf --variant-file nope.glsl"), "nope.glsl: no such variant file");
-  ExpectOneClearError(Shimmer("ndf --variant tk19 --variant-file " + file), "give one of them");
+  ExpectOneClearError(Shimmer("ndf --variant tk19 --variant-file " + file), "both name the filter; give one");
 }
 
 TEST(GpuCli, BadInputGetsOneMessageAndNoFrames) {

@@ -5,11 +5,13 @@
 #pragma once
 
 #include <map>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "shimmer/core/result.h"
+#include "shimmer/renderer/user_variant.h"
 
 namespace shimmer::experiments {
 
@@ -20,16 +22,10 @@ struct VariantSweep {
 };
 
 // A user's variant file named in a spec (variant entry {"file", "name",
-// "params"}): the file as resolved against the spec's folder, the hash of its
-// content (job ids hash it, so an edited file is new work) and the
-// parameters it declares (docs/variants.md).
-struct UserVariantRef {
-  std::string file;
-  std::string hash;
-  std::string summary;
-  std::map<std::string, double> defaults;
-  std::map<std::string, std::pair<double, double>> ranges;  // [lo, hi] per parameter
-};
+// "params"}), parsed: its file as resolved against the spec's folder, the
+// hash of its content (job ids hash it, so an edited file is new work) and
+// the parameters it declares (docs/variants.md).
+using UserVariantRef = std::shared_ptr<const shading::UserVariant>;
 
 // How much a shot's metrics of `none` may move when the reference doubles
 // its samples per axis before the shot is called unconverged.

@@ -22,6 +22,8 @@ namespace shimmer::experiments {
 namespace report {
 
 std::string Label(const JobResult& r) {
+  // Every table, plot and summary says which rows shimmer did not render.
+  if (r.job.external) return r.job.variant + " (external)";
   std::string label = r.job.variant;
   for (const auto& [k, v] : r.job.params) {
     std::ostringstream s;
@@ -34,6 +36,7 @@ std::string Label(const JobResult& r) {
 std::string Region(const JobResult& r) { return r.metrics.value("region", std::string("frame")); }
 
 bool IsSupersample(const JobResult& r) {
+  if (r.job.external) return false;
   auto name = shading::ParseVariantName(r.job.variant);
   return name && name->kind == shading::VariantName::Kind::kSupersample;
 }
@@ -106,9 +109,15 @@ Quartiles QuartilesOf(std::vector<double> values) {
 }
 
 const JobResult* NoneOf(const Group& group) {
+  // A shot shimmer renders has its own `none`; an engine's shot can bring one
+  // as an external sequence labelled "none".
+  const JobResult* external = nullptr;
   for (const JobResult* r : group.rows)
-    if (r->job.variant == "none") return r;
-  return nullptr;
+    if (r->job.variant == "none") {
+      if (!r->job.external) return r;
+      external = r;
+    }
+  return external;
 }
 
 std::vector<Sample> SamplesOf(const Group& group) {
@@ -133,7 +142,12 @@ std::vector<Group> GroupRows(const std::vector<JobResult>& rows) {
   std::map<std::string, Group> groups;
   std::map<std::string, std::set<std::string>> sources_of_shot;
   auto shot = [](const JobResult& r) { return r.job.scene + " / " + r.job.material + " / " + r.job.camera; };
-  for (const JobResult& r : rows) sources_of_shot[shot(r)].insert(r.job.derivatives);
+  // External frames read no derivatives of shimmer's: like `none`, they join
+  // every rendered derivative group of their shot, or one of their own.
+  for (const JobResult& r : rows)
+    if (!r.job.external) sources_of_shot[shot(r)].insert(r.job.derivatives);
+  for (const JobResult& r : rows)
+    if (r.job.external && !sources_of_shot.count(shot(r))) sources_of_shot[shot(r)].insert(kExternalDerivatives);
   auto add = [&](const JobResult& r, const std::string& source) {
     Group& g = groups[shot(r) + " / " + source];
     if (g.rows.empty()) {
@@ -144,7 +158,7 @@ std::vector<Group> GroupRows(const std::vector<JobResult>& rows) {
     g.rows.push_back(&r);
   };
   for (const JobResult& r : rows) {
-    if (ReadsDerivatives(r.job.variant)) {
+    if (!r.job.external && ReadsDerivatives(r.job.variant)) {
       add(r, r.job.derivatives);
       continue;
     }

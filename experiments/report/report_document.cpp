@@ -2,6 +2,7 @@
 // heatmap, recommendations, shots left out), the per-shot tables, the method.
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 #include <sstream>
 #include <tuple>
@@ -177,8 +178,11 @@ void ShotTable(Document& doc, const Group& group) {
       reference = "Reference: **unconverged**, left out of the overview (" + CheckNumbers(*CheckOf(group)) + ").";
       break;
     case Convergence::kUnchecked:
-      reference = "Reference: **unchecked** (no convergence check in the store), " +
-                  std::to_string(group.rows.front()->job.reference.spp) + " spp per axis.";
+      if (group.derivatives == kExternalDerivatives)
+        reference = "Reference: each external sequence's own (unchecked: shimmer did not render it).";
+      else
+        reference = "Reference: **unchecked** (no convergence check in the store), " +
+                    std::to_string(group.rows.front()->job.reference.spp) + " spp per axis.";
       break;
   }
   std::set<std::string> bench_devices;
@@ -188,6 +192,8 @@ void ShotTable(Document& doc, const Group& group) {
   std::string cost;
   if (bench_devices.empty())
     cost = "No benchmark: cost ×none n/a; render ms is the metric render's own GPU time (small renders, noisy).";
+  else if (bench_devices.size() == 1 && bench->driver == "external")
+    cost = "Cost: the external sequences' own, on " + bench->device + "; cost ×none is to a `none` timed there.";
   else if (bench_devices.size() == 1)
     cost = "Benchmark on " + bench->device + " (" + bench->driver + "), " + std::to_string(bench->width) + "×" +
            std::to_string(bench->height) + ", " + std::to_string(bench->repetitions) +
@@ -304,6 +310,35 @@ void UserVariantsSection(Document& doc, const std::vector<Group>& groups) {
   doc.Table({"variant", "file", "content hash"}, cells);
 }
 
+// Rows from an engine's own frames, named once with where the frames were,
+// what they held and the user's cost, so that a reader can tell them from
+// what shimmer rendered.
+void ExternalSequencesSection(Document& doc, const std::vector<Group>& groups) {
+  std::map<std::string, const JobResult*> rows;  // by id: a row joins several derivative groups
+  for (const Group& g : groups)
+    for (const JobResult* r : g.rows)
+      if (r->job.external) rows.emplace(r->id, r);
+  if (rows.empty()) return;
+  doc.Heading(2, kExternalHeading);
+  doc.Paragraph(
+      "These rows are frames rendered elsewhere (spec section `sequences`, docs/experiments.md), each measured "
+      "against its own reference with the same metrics, intervals and region rules as the rendered rows, and "
+      "labelled `(external)` in every table. A sequence that names a shot the spec renders sits in that shot's "
+      "tables, beside its `none`; its ratio to `none` is meaningful only when both references show the same shot. "
+      "Cost is the user's own time per frame on their device. The frames' content hashes are part of the job ids: "
+      "frames rendered anew are measured anew.");
+  std::vector<std::vector<std::string>> cells;
+  for (const auto& [id, r] : rows) {
+    const ExternalFrames& f = *r->job.external;
+    cells.push_back({Code(Label(*r)), r->job.scene + " / " + r->job.material + " / " + r->job.camera, Code(f.test),
+                     Code(f.reference), std::to_string(r->job.frames) + " × " + std::to_string(r->job.width) + "×" +
+                                            std::to_string(r->job.height),
+                     f.ms_per_frame > 0 ? Fmt(f.ms_per_frame, "%.3g") + " ms on " + f.device : "not given",
+                     Code(f.test_hash)});
+  }
+  doc.Table({"label", "shot", "test", "reference", "frames", "cost", "content hash"}, cells);
+}
+
 }  // namespace
 
 void Document::Heading(int level, const std::string& text) {
@@ -348,6 +383,7 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
   Overview(doc, groups);
   if (sg) SgAccuracySection(doc, *sg);
   UserVariantsSection(doc, groups);
+  ExternalSequencesSection(doc, groups);
   doc.Heading(2, kShotsHeading);
   doc.Paragraph(
       "Ordered by scene, roughness α, camera and derivative source. Values carry their 95 % interval in "

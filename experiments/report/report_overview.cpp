@@ -38,6 +38,7 @@ std::vector<VariantSummary> Summarise(const std::vector<const Group*>& groups) {
       VariantSummary& v = by_label[Label(*s.row)];
       v.label = Label(*s.row);
       v.supersample = IsSupersample(*s.row);
+      v.none = s.row->job.variant == "none";
       v.samples.push_back(s);
     }
   std::vector<VariantSummary> out;
@@ -124,7 +125,7 @@ std::vector<Recommendation> Recommend(const std::vector<const Group*>& groups) {
     rec.shots = int(shots.size());
     rec.summaries = Summarise(members);
     auto qualifies = [&](const VariantSummary& v) {
-      return v.label != "none" && v.ratio.n >= kCoverage * rec.tables && v.energy_share >= kCoverage;
+      return !v.none && v.ratio.n >= kCoverage * rec.tables && v.energy_share >= kCoverage;
     };
     for (const VariantSummary& v : rec.summaries)
       if (!v.supersample && qualifies(v) && !std::isnan(v.ratio.median)) {

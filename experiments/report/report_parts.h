@@ -84,6 +84,7 @@ std::vector<Sample> SamplesOf(const Group& group);
 struct VariantSummary {
   std::string label;
   bool supersample = false;
+  bool none = false;  // the baseline (rendered, or an external sequence labelled "none")
   std::vector<Sample> samples;
   Quartiles ratio;                          // over the tables
   double ratio_lo = kNaN, ratio_hi = kNaN;  // medians of the per-table interval bounds

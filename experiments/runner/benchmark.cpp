@@ -26,8 +26,10 @@ double Median(std::vector<double> v) {
 std::vector<BenchmarkBatch> BenchmarkBatches(const std::vector<Job>& jobs) {
   std::vector<BenchmarkBatch> batches;
   std::set<std::string> derivative_sources;
-  for (const Job& job : jobs) derivative_sources.insert(job.derivatives);
+  for (const Job& job : jobs)
+    if (!job.external) derivative_sources.insert(job.derivatives);
   for (const Job& job : jobs) {
+    if (job.external) continue;  // its cost is the user's, if they gave one
     // Variants that read no derivatives cost the same under every source:
     // they join every batch of their scene, so that each batch has its `none`.
     for (const std::string& derivatives : derivative_sources) {

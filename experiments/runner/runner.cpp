@@ -74,7 +74,39 @@ Result<metrics::MetricsReport> MeasureAgainst(const Job& job, const fs::path& te
     mo.highlight.empty_falls_back_to_frame = true;
   }
   mo.segment_length = job.metrics.segment;
+  mo.request.fps = job.fps;  // only where the sequence has no sequence.json to say
   return metrics::ComputeMetrics(mo);
+}
+
+// The id promised these frames: frames re-rendered since the spec was read
+// would store other numbers under it.
+Status CheckExternalFrames(const Job& job) {
+  const ExternalFrames& files = *job.external;
+  for (const auto& [path, hash] : {std::pair{&files.test, &files.test_hash}, {&files.reference, &files.reference_hash}}) {
+    auto now = SequenceContentHash(*path);
+    if (!now) return now.failure();
+    if (*now != *hash) return Status::Failure(*path + ": the frames changed since the spec was read; run again");
+  }
+  return Ok();
+}
+
+// An external sequence measured as it lies: nothing rendered, nothing cached.
+Result<JobResult> MeasureExternal(const Job& job) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (Status s = CheckExternalFrames(job); !s) return s.failure();
+  auto report = MeasureAgainst(job, job.external->test, job.external->reference, {});
+  if (!report) return report.failure();
+  JobResult r;
+  r.id = JobId(job);
+  r.reference_id = ReferenceId(job);
+  r.job = job;
+  r.metrics = metrics::ToJson(*report);
+  r.gpu_ms_per_frame = job.external->ms_per_frame;
+  r.revision = render::SourceRevision();
+  r.device = job.external->device;
+  r.driver = "external";
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
 }
 
 Result<render::RenderSettings> JobSettings(const Job& job, const RunOptions& options) {
@@ -123,6 +155,7 @@ Status EnsureReference(const Job& job, const RunOptions& options) {
 }
 
 Result<JobResult> MeasureJob(const Job& job, const RunOptions& options) {
+  if (job.external) return MeasureExternal(job);
   const auto t0 = std::chrono::steady_clock::now();
   auto test = JobSettings(job, options);
   if (!test) return test.failure();
@@ -166,6 +199,7 @@ Status CheckShots(const std::vector<Job>& all_jobs, const RunOptions& options, R
   std::set<std::string> seen;
   int index = 0;
   for (const Job& job : all_jobs) {
+    if (job.external) continue;  // its reference is the user's, rendered by no one here
     if (!seen.insert(ReferenceId(job)).second) continue;
     if (index++ % options.shard_count != options.shard_index) continue;
     auto has = store.HasShot(ReferenceId(job));
@@ -260,7 +294,12 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
   summary.total = int(jobs.size());
   // Bad input is found before anything is created.
   for (const Job& job : jobs) {
-    auto settings = JobSettings(job, options);
+    Status settings = Ok();
+    if (job.external) {
+      settings = CheckExternalFrames(job);
+    } else if (auto rendered = JobSettings(job, options); !rendered) {
+      settings = rendered.failure();
+    }
     if (!settings) {
       summary.error = Prefixed(
           "job " + JobId(job) + " (" + job.scene + " " + job.material + " " + job.camera + " " + job.variant + ")",
@@ -287,7 +326,8 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
   std::unique_ptr<ResultStore> store = std::move(*opened);
   // One lock per shared reference, so two workers never render the same one.
   std::map<std::string, std::mutex> reference_locks;
-  for (const Job& job : jobs) reference_locks[ReferenceId(job)];
+  for (const Job& job : jobs)
+    if (!job.external) reference_locks[ReferenceId(job)];
 
   const auto start = std::chrono::steady_clock::now();
   std::mutex mutex;  // guards the store, the summary and the progress
@@ -316,7 +356,7 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
       if (!*done) {
         const auto t0 = std::chrono::steady_clock::now();
         Status reference = Ok();
-        {
+        if (!job.external) {
           std::lock_guard<std::mutex> lock(reference_locks.at(ReferenceId(job)));
           reference = EnsureReference(job, options);
         }

@@ -32,6 +32,13 @@ json Job::ToJson() const {
     j["variant_file"] = variant_file;
     j["variant_hash"] = variant_hash;
   }
+  if (external)
+    j["external"] = {{"test", external->test},
+                     {"reference", external->reference},
+                     {"test_hash", external->test_hash},
+                     {"reference_hash", external->reference_hash},
+                     {"ms_per_frame", external->ms_per_frame},
+                     {"device", external->device}};
   return j;
 }
 
@@ -56,6 +63,16 @@ Job Job::FromJson(const json& j) {
   job.metrics.segment = j.at("segment");
   job.variant_file = j.value("variant_file", std::string());
   job.variant_hash = j.value("variant_hash", std::string());
+  if (const auto e = j.find("external"); e != j.end() && e->is_object()) {
+    ExternalFrames f;
+    f.test = e->at("test");
+    f.reference = e->at("reference");
+    f.test_hash = e->at("test_hash");
+    f.reference_hash = e->at("reference_hash");
+    f.ms_per_frame = e->value("ms_per_frame", 0.0);
+    f.device = e->value("device", std::string());
+    job.external = f;
+  }
   return job;
 }
 
@@ -104,6 +121,22 @@ Job SpecJob(const Spec& spec, const std::string& scene, const std::string& mater
   return job;
 }
 
+Job ExternalJob(const Spec& spec, const ExternalSequence& sequence) {
+  Job job;
+  job.scene = sequence.scene;
+  job.material = sequence.material;
+  job.camera = sequence.camera;
+  job.variant = sequence.label;
+  job.derivatives = kExternalDerivatives;
+  job.width = sequence.width;
+  job.height = sequence.height;
+  job.frames = sequence.frames;
+  job.fps = sequence.fps > 0 ? sequence.fps : spec.fps;
+  job.metrics = spec.metrics;
+  job.external = sequence.files;
+  return job;
+}
+
 Job AsNone(const Job& job) {
   Job none = job;
   none.variant = "none";
@@ -139,6 +172,7 @@ std::vector<Job> ExpandJobs(const Spec& spec) {
                 if (!reads) key.derivatives.clear();
                 if (seen.insert(JobId(key)).second) jobs.push_back(std::move(job));
               }
+  for (const ExternalSequence& sequence : spec.sequences) jobs.push_back(ExternalJob(spec, sequence));
   return jobs;
 }
 
@@ -180,6 +214,13 @@ std::string JobId(const Job& job) { return JobIdForCore(job, ShadingCoreVersion(
 
 std::string JobIdForCore(const Job& job, std::string_view core_version) {
   json j = job.ToJson();
+  if (job.external) {
+    // Where the frames lie moves no number; what they hold does.
+    j["external"].erase("test");
+    j["external"].erase("reference");
+    j.erase("reference_spp"), j.erase("reference_tolerance"), j.erase("reference_replicates");
+    return Fnv1a64Hex(j.dump());
+  }
   j["core"] = core_version;
   j.erase("variant_file");  // where the file is moves no number; its content (variant_hash) does
   // Defaults live in the C++ catalogue, not in the GLSL the core version
@@ -200,6 +241,7 @@ std::string JobIdForCore(const Job& job, std::string_view core_version) {
 }
 
 std::string ReferenceId(const Job& job) {
+  if (job.external) return Fnv1a64Hex(json{{"external_reference", job.external->reference_hash}}.dump());
   json j = {{"scene", job.scene},
             {"material", job.material},
             {"camera", job.camera},

@@ -33,6 +33,7 @@ struct SpecError {
   // message shows `label` ("groups[0].variants: k16-nope") instead of it.
   int group = -1;
   std::string label = {};
+  std::string array = "groups";  // the list `group` indexes: "groups" or "sequences"
 };
 
 // What parsing variants needs besides the JSON: where variant files are
@@ -55,12 +56,13 @@ int LineOfKey(std::string_view text, const std::string& key, std::size_t from = 
   return LineAt(text, pos);
 }
 
-// Where element `index` of the array after the first "groups" key starts,
+// Where element `index` of the array after the first `"array"` key starts,
 // or npos. The text is valid JSON (it parsed); only strings need care.
-std::size_t GroupOffset(std::string_view text, int index) {
-  std::size_t pos = text.find("\"groups\"");
+std::size_t ElementOffset(std::string_view text, const std::string& array, int index) {
+  const std::string needle = "\"" + array + "\"";
+  std::size_t pos = text.find(needle);
   if (pos == std::string_view::npos) return pos;
-  pos = text.find_first_not_of(" \t\r\n:", pos + 8);
+  pos = text.find_first_not_of(" \t\r\n:", pos + needle.size());
   if (pos == std::string_view::npos || text[pos] != '[') return std::string_view::npos;
   int depth = 0, element = 0;
   bool in_string = false;
@@ -93,12 +95,13 @@ std::size_t GroupOffset(std::string_view text, int index) {
 // "groups[index].field: key: problem", or "groups[index].field: problem" when
 // the key is the field.
 template <class Parse>
-auto InGroup(int index, const std::string& field, Parse&& parse) {
+auto InGroup(int index, const std::string& field, Parse&& parse, const char* array = "groups") {
   try {
     return parse();
   } catch (SpecError& e) {
     if (!e.label.empty()) throw;  // named already, by a nested call
-    const std::string at = "groups[" + std::to_string(index) + "]";
+    e.array = array;
+    const std::string at = std::string(array) + "[" + std::to_string(index) + "]";
     if (field.empty())
       e.label = at + (e.key.empty() ? "" : "." + e.key);
     else
@@ -379,23 +382,118 @@ FitConfig ParseFit(const json& f, const Spec& spec) {
   return c;
 }
 
+// A name a report shows as a row or a table (labels, shots): printable, bounded.
+std::string ShownName(const json& j, const std::string& key, std::size_t max_size) {
+  if (!j.is_string() || j.get<std::string>().empty() || j.get<std::string>().size() > max_size)
+    throw SpecError{key, "must be a string of 1 to " + std::to_string(max_size) + " characters, found " + Quote(j)};
+  const std::string text = j.get<std::string>();
+  for (unsigned char c : text)
+    if (c < 0x20 || c == 0x7f || c == '|' || c == '"') throw SpecError{key, "must not hold control characters, '|' or '\"'"};
+  return text;
+}
+
+// Whether some cross product of the spec renders this shot.
+bool RendersShot(const Spec& spec, const std::string& scene, const std::string& material, const std::string& camera) {
+  for (const ShotGroup& g : AllGroups(spec)) {
+    auto has = [](const std::vector<std::string>& v, const std::string& x) {
+      return std::find(v.begin(), v.end(), x) != v.end();
+    };
+    if (has(g.scenes, scene) && has(g.materials, material) && has(g.cameras, camera)) return true;
+  }
+  return false;
+}
+
+// sequences[index]: {"label", "test", "reference", "shot", "fps", "cost"}.
+ExternalSequence ParseSequence(const json& e, int index, const Spec& spec, const std::filesystem::path& base) {
+  return InGroup(index, "", [&] {
+    constexpr const char* kForm =
+        "must be {\"label\", \"test\", \"reference\"} with optional \"shot\", \"fps\" and \"cost\"";
+    if (!e.is_object()) throw SpecError{"", kForm};
+    RejectUnknownKeys(e, {"label", "test", "reference", "shot", "fps", "cost"}, "a sequence");
+    for (const char* required : {"label", "test", "reference"})
+      if (!e.contains(required)) throw SpecError{"", std::string("needs \"") + required + "\" (" + kForm + ")"};
+    ExternalSequence seq;
+    seq.label = e["label"].is_string() ? e["label"].get<std::string>() : std::string();
+    if (seq.label.empty() || seq.label.size() > 64 || seq.label.front() == '.' ||
+        seq.label.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789._-") !=
+            std::string::npos)
+      throw SpecError{"label", "must be 1 to 64 letters, digits, '.', '_' or '-', found " + Quote(e["label"])};
+    for (const char* key : {"test", "reference"}) {
+      if (!e[key].is_string() || e[key].get<std::string>().empty())
+        throw SpecError{key, "must be the path of a directory of EXR frames or of a sequence.json (relative to the spec)"};
+      const std::filesystem::path path(e[key].get<std::string>());
+      (std::string(key) == "test" ? seq.files.test : seq.files.reference) =
+          (path.is_absolute() ? path : base / path).lexically_normal().string();
+    }
+    if (e.contains("shot")) {
+      const json& shot = e["shot"];
+      if (!shot.is_object() || shot.empty())
+        throw SpecError{"shot", "must be {\"scene\", \"material\", \"camera\"} (any of them)"};
+      RejectUnknownKeys(shot, {"scene", "material", "camera"}, "shot");
+      if (shot.contains("scene")) seq.scene = ShownName(shot["scene"], "scene", 128);
+      if (shot.contains("material")) seq.material = ShownName(shot["material"], "material", 128);
+      if (shot.contains("camera")) seq.camera = ShownName(shot["camera"], "camera", 128);
+    }
+    if (e.contains("fps")) {
+      seq.fps = Number(e["fps"], "fps");
+      if (seq.fps <= 0 || seq.fps > 1e6) throw SpecError{"fps", "must be > 0 and <= 1e6"};
+    }
+    if (e.contains("cost")) {
+      const json& c = e["cost"];
+      if (!c.is_object() || !c.contains("ms_per_frame") || !c.contains("device"))
+        throw SpecError{"cost", "must be {\"ms_per_frame\": MS, \"device\": NAME}: the time and where it was measured"};
+      RejectUnknownKeys(c, {"ms_per_frame", "device"}, "cost");
+      seq.files.ms_per_frame = Number(c["ms_per_frame"], "ms_per_frame");
+      if (seq.files.ms_per_frame <= 0) throw SpecError{"ms_per_frame", "must be > 0"};
+      seq.files.device = ShownName(c["device"], "device", 128);
+    }
+    for (const ExternalSequence& other : spec.sequences)
+      if (other.label == seq.label && other.scene == seq.scene && other.material == seq.material &&
+          other.camera == seq.camera)
+        throw SpecError{"label", "'" + seq.label + "' names two sequences of the shot " + seq.scene + " / " +
+                                     seq.material + " / " + seq.camera};
+    if (seq.label == "none" && RendersShot(spec, seq.scene, seq.material, seq.camera))
+      throw SpecError{"label", "'none': the spec renders `none` of the shot " + seq.scene + " / " + seq.material +
+                                   " / " + seq.camera + " already; give the sequence another label"};
+    std::string bad_key;
+    auto opened = OpenExternalSequence(std::move(seq), &bad_key);
+    if (!opened) throw SpecError{bad_key, opened.error()};
+    return std::move(*opened);
+  }, "sequences");
+}
+
 Spec ParseSpecObject(const json& j, const std::filesystem::path& base) {
   if (!j.is_object()) throw SpecError{"", "a spec is a JSON object"};
   RejectUnknownKeys(j,
                     {"name", "scenes", "materials", "cameras", "variants", "derivatives", "groups", "size", "frames",
-                     "fps", "reference", "metrics", "benchmark", "fit"},
+                     "fps", "reference", "metrics", "benchmark", "fit", "sequences"},
                     "");
   Spec s;
-  for (const char* required : {"name", "scenes", "materials", "cameras", "variants"})
-    if (!j.contains(required)) throw SpecError{required, "is required"};
+  if (!j.contains("name")) throw SpecError{"name", "is required"};
+  // External sequences alone are a spec; the rendered cross product is all
+  // or nothing.
+  const char* const kCrossProduct[] = {"scenes", "materials", "cameras", "variants"};
+  const bool renders = std::any_of(std::begin(kCrossProduct), std::end(kCrossProduct),
+                                   [&](const char* key) { return j.contains(key); });
+  if (renders || !j.contains("sequences"))
+    for (const char* required : kCrossProduct)
+      if (!j.contains(required))
+        throw SpecError{required, j.contains("sequences") ? "is required with the other keys of the rendered cross "
+                                                            "product (scenes, materials, cameras, variants)"
+                                                          : "is required"};
   if (!j["name"].is_string()) throw SpecError{"name", "must be a string"};
   s.name = j["name"];
   CheckName(s.name);
-  s.scenes = Scenes(j["scenes"]);
-  s.materials = Materials(j["materials"]);
-  s.cameras = Cameras(j["cameras"]);
   const VariantContext ctx{base, &s};
-  s.variants = Variants(j["variants"], ctx);
+  if (renders) {
+    s.scenes = Scenes(j["scenes"]);
+    s.materials = Materials(j["materials"]);
+    s.cameras = Cameras(j["cameras"]);
+    s.variants = Variants(j["variants"], ctx);
+  } else if (j.contains("groups") || j.contains("fit")) {
+    throw SpecError{j.contains("groups") ? "groups" : "fit",
+                    "needs the rendered cross product (scenes, materials, cameras, variants)"};
+  }
   if (j.contains("derivatives")) s.derivatives = DerivativeSources(j["derivatives"]);
   if (j.contains("groups")) {
     const json& g = j["groups"];
@@ -497,6 +595,13 @@ Spec ParseSpecObject(const json& j, const std::filesystem::path& base) {
       throw SpecError{"fit", "must be an object or a non-empty list of objects"};
     }
   }
+  if (j.contains("sequences")) {
+    const json& q = j["sequences"];
+    if (!q.is_array() || q.empty())
+      throw SpecError{"sequences", "must be a non-empty list of {\"label\", \"test\", \"reference\"} objects"};
+    if (q.size() > std::size_t(kMaxJobs)) throw SpecError{"sequences", "at most " + std::to_string(kMaxJobs)};
+    for (std::size_t i = 0; i < q.size(); ++i) s.sequences.push_back(ParseSequence(q[i], int(i), s, base));
+  }
   // Counted before anything is expanded, every group's cross product
   // together (before jobs two groups share are merged): a cross product can
   // be astronomically large.
@@ -529,7 +634,7 @@ Result<Spec> ParseSpec(std::string_view text, const std::string& source) {
   } catch (const SpecError& e) {
     // In a group, the key is looked for from the group on, and the group's
     // own line stands in when it is not found there.
-    const std::size_t group_at = e.group >= 0 ? GroupOffset(text, e.group) : std::string_view::npos;
+    const std::size_t group_at = e.group >= 0 ? ElementOffset(text, e.array, e.group) : std::string_view::npos;
     const std::size_t from = group_at == std::string_view::npos ? 0 : group_at;
     int line = e.key.empty() ? 0 : LineOfKey(text, e.key, from);
     if (!line && group_at != std::string_view::npos) line = LineAt(text, group_at);

@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
@@ -406,7 +407,35 @@ Result<std::vector<JobResult>> ResultStore::Select(const std::string& where, con
       if (c->device == r.device) cost = c;
     r.cost = *cost;
   }
+  JoinExternalCosts(rows);
   return rows;
+}
+
+void JoinExternalCosts(std::vector<JobResult>& rows) {
+  // The user's own time per frame, as a one-repetition benchmark on their
+  // device; its ratio is to a `none` of the same shot timed on that device.
+  auto shot = [](const Job& j) { return std::tuple(j.scene, j.material, j.camera); };
+  for (JobResult& r : rows) {
+    if (!r.job.external || !(r.job.external->ms_per_frame > 0)) continue;
+    BenchmarkCost c;
+    c.scene = r.job.scene, c.material = r.job.material, c.camera = r.job.camera;
+    c.derivatives = r.job.derivatives, c.variant = r.job.variant;
+    c.width = r.job.width, c.height = r.job.height, c.repetitions = 1;
+    c.median_ms = c.min_ms = c.max_ms = r.job.external->ms_per_frame;
+    c.device = r.job.external->device, c.driver = "external";
+    c.ratio_to_none = std::numeric_limits<double>::quiet_NaN();
+    r.cost = c;
+  }
+  for (JobResult& r : rows) {
+    if (!r.job.external || !r.cost) continue;
+    for (const JobResult& none : rows) {
+      if (none.job.variant != "none" || shot(none.job) != shot(r.job) || !none.cost) continue;
+      if (none.cost->device != r.cost->device || !(none.cost->median_ms > 0)) continue;
+      r.cost->none_median_ms = none.cost->median_ms;
+      r.cost->ratio_to_none = r.cost->median_ms / none.cost->median_ms;
+      break;
+    }
+  }
 }
 
 Result<bool> ResultStore::HasShot(const std::string& reference_id) {

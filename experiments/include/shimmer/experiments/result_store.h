@@ -93,6 +93,12 @@ struct JobResult {
   std::optional<BenchmarkCost> cost;
 };
 
+// Gives each external row with a cost (ExternalFrames::ms_per_frame) a
+// BenchmarkCost of one repetition on the user's device, with its ratio to a
+// `none` of the same shot timed on that device (NaN without one). Part of
+// ResultStore::All.
+void JoinExternalCosts(std::vector<JobResult>& rows);
+
 // A metric of the metrics library's JSON (e.g. "tv_err"), NaN when absent
 // or not a number; FlickerIndex reads flicker.flicker_index.
 double Metric(const nlohmann::json& metrics, const char* key);

@@ -92,6 +92,39 @@ struct ShotGroup {
   std::vector<std::string> derivatives;
 };
 
+// An engine's own frames (spec section "sequences"; docs/experiments.md):
+// a test sequence and its reference, measured with the same metrics,
+// intervals and region rules as the rendered jobs and reported beside them,
+// marked external. Paths are resolved against the spec's folder; the hashes
+// are of every frame's bytes, so re-rendered frames are new work.
+struct ExternalFrames {
+  std::string test, reference;
+  std::string test_hash, reference_hash;
+  double ms_per_frame = 0;  // the user's own cost; 0: not given
+  std::string device;       // where that cost was measured
+  bool operator==(const ExternalFrames&) const = default;
+};
+
+struct ExternalSequence {
+  std::string label;  // the row's name in the report, like a variant's
+  // The shot it shows: a shot the spec renders puts the sequence in that
+  // shot's tables; any other names a table of its own.
+  std::string scene = "external", material = "-", camera = "-";
+  double fps = 0;  // used when the sequence has no sequence.json to say; 0: the spec's fps
+  int width = 0, height = 0, frames = 0;
+  ExternalFrames files;
+};
+
+// The hash of every frame of a sequence (a directory of EXR frames or a
+// sequence.json): file names and bytes, in frame order. Where the frames
+// lie does not count.
+Result<std::string> SequenceContentHash(const std::string& path);
+// `sequence` with its frames' size, count and hashes, after opening every
+// frame's header of its test and reference sequences (files.test and
+// files.reference) and checking that they match. On failure `bad_key` says
+// which of "test" and "reference" is wrong.
+Result<ExternalSequence> OpenExternalSequence(ExternalSequence sequence, std::string* bad_key);
+
 struct Spec {
   std::string name;
   // The top-level cross product (the first of AllGroups).
@@ -115,6 +148,9 @@ struct Spec {
   std::vector<FitConfig> fits;  // the `fit` section: one object or a list
   // User variants by the name their entries give them (in any group).
   std::map<std::string, UserVariantRef> user_variants;
+  // Spec key "sequences". A spec with sequences may leave out the rendered
+  // cross product (scenes, materials, cameras, variants) altogether.
+  std::vector<ExternalSequence> sequences;
 };
 
 // Loads `path`, checks that it compiles as a variant and registers it as

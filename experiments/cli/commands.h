@@ -92,6 +92,7 @@ void StorePaths(const std::string& spec_name, const std::string& db, const std::
                 const std::string& db_file, experiments::RunOptions* ro, NewDirectories* dirs);
 
 void AddVariantsCommand(CLI::App& app);
+void AddVideoCommand(CLI::App& app);
 void AddNdfCommand(CLI::App& app);
 void AddRenderCommand(CLI::App& app);
 void AddMetricsCommand(CLI::App& app);

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   shimmer::cli::AddNdfCommand(app);
   shimmer::cli::AddRenderCommand(app);
   shimmer::cli::AddMetricsCommand(app);
+  shimmer::cli::AddVideoCommand(app);
   shimmer::cli::AddRunCommand(app);
   shimmer::cli::AddMergeCommand(app);
   shimmer::cli::AddSweepCommand(app);

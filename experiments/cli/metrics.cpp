@@ -10,7 +10,7 @@
 #include "commands.h"
 #include "shimmer/metrics/metrics_report.h"
 #include "shimmer/metrics/report_files.h"
-#include "shimmer/metrics/side_by_side_video.h"
+#include "shimmer/metrics/video_grid.h"
 
 namespace shimmer::cli {
 
@@ -22,6 +22,7 @@ struct MetricsCliOptions {
   std::string test, reference;
   double fps = 0;
   std::string layer, mask, signal, out, video;
+  int slow = 1;
   bool highlight_mask = false;
   double highlight_threshold = m::HighlightMaskOptions{}.threshold;
   int highlight_dilate = m::HighlightMaskOptions{}.dilate_radius;
@@ -104,6 +105,7 @@ void Run(const MetricsCliOptions& o) {
   if (o.segment < 0 || o.segment == 1) throw UsageError("--segment must be >= 2");
   options.segment_length = o.segment;
   if (!o.video.empty()) RequireParentDirectory("--video", o.video);
+  if (o.slow < 1 || o.slow > 100) throw UsageError("--slow must be 1..100, got " + std::to_string(o.slow));
   if (!o.out.empty()) {
     std::error_code ec;
     const std::filesystem::path out(o.out);
@@ -112,17 +114,22 @@ void Run(const MetricsCliOptions& o) {
     RequireParentDirectory("--out", o.out);
   }
 
-  std::unique_ptr<m::SideBySideVideo> video;
+  std::unique_ptr<m::VideoGrid> video;
   m::FrameObserver observer;
   if (!o.video.empty()) {
     observer = [&](const m::ObservedFrame& frame) -> Status {
       if (!video) {
-        auto opened =
-            m::SideBySideVideo::Open(o.video, frame.test.cols, frame.test.rows, frame.fps, frame.has_reference);
+        m::VideoGridOptions grid;
+        grid.labels = {m::SequenceLabel(o.test)};
+        grid.with_reference = frame.has_reference;
+        grid.width = frame.test.cols, grid.height = frame.test.rows;
+        grid.fps = frame.fps;
+        grid.slow = o.slow;
+        auto opened = m::VideoGrid::Open(o.video, std::move(grid));
         if (!opened) return opened.failure();
         video = std::move(*opened);
       }
-      return video->AddFrame(frame.test, frame.other);
+      return video->AddFrame({frame.test}, frame.has_reference ? frame.other : cv::Mat());
     };
   }
 
@@ -173,7 +180,10 @@ void AddMetricsCommand(CLI::App& app) {
   cmd->add_option("--signal", o->signal, "Spectrum of: error (T - R, default with REF) or test");
   cmd->add_option("--segment", o->segment, "Welch segment length L (default min(frames, 64))");
   cmd->add_option("--out", o->out, "Directory for maps (EXR + PNG heatmaps), spectrum CSV/plot, metrics.json");
-  cmd->add_option("--video", o->video, "Write an MP4: test | reference | error heatmap");
+  cmd->add_option("--video", o->video,
+                  "Write an MP4: labelled reference and test, the signed error below the test, a legend (see "
+                  "`shimmer video` for several sequences)");
+  cmd->add_option("--slow", o->slow, "Video: write each frame N times (slow motion)")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print one JSON object on stdout");
   cmd->callback([o] { Run(*o); });
 }

@@ -240,7 +240,7 @@ std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<
 }
 
 Status WriteReport(const std::vector<JobResult>& rows, const std::string& title, const std::string& out_dir,
-                   std::vector<std::string>* warnings) {
+                   std::vector<std::string>* warnings, const ShotVideoWriter& video) {
   if (rows.empty()) return Status::Failure("the results store has no finished jobs");
   auto staged = StagedDirectory::Create(out_dir);
   if (!staged) return staged.failure();
@@ -260,7 +260,16 @@ Status WriteReport(const std::vector<JobResult>& rows, const std::string& title,
       warnings->push_back("the report has no section \"" + std::string(report::kSgAccuracyHeading) +
                           "\": " + measured.error());
   }
-  const report::Document doc = report::BuildDocument(groups, title, rows.size(), sg ? &*sg : nullptr);
+  std::set<std::string> videos;  // group keys with a grid video
+  if (video)
+    for (const report::Group& group : groups) {
+      std::vector<const JobResult*> ordered = group.rows;
+      std::stable_partition(ordered.begin(), ordered.end(), [](const JobResult* r) { return r->job.variant == "none"; });
+      const std::filesystem::path file = dir.staging() / (Slug(group.key) + kVideoSuffix);
+      if (Status s = video(ordered, file); !s) return dir.Unstaged(Prefixed("video of " + group.key, s.failure()));
+      videos.insert(group.key);
+    }
+  const report::Document doc = report::BuildDocument(groups, title, rows.size(), sg ? &*sg : nullptr, &videos);
 
   std::vector<report::PlotFile> files;
   if (sg) {

@@ -163,7 +163,7 @@ void Overview(Document& doc, const std::vector<Group>& groups) {
   doc.List(items);
 }
 
-void ShotTable(Document& doc, const Group& group) {
+void ShotTable(Document& doc, const Group& group, bool has_video) {
   const Costs costs = CostsOf(group);
   const std::vector<Sample> samples = SamplesOf(group);
   const std::string slug = Slug(group.key);
@@ -205,6 +205,10 @@ void ShotTable(Document& doc, const Group& group) {
   doc.Paragraph(reference + " " + cost + " Pareto cost: " + costs.source + ".");
   doc.Figures({slug + "_pareto_tv_err.svg", slug + "_pareto_relmse.svg", slug + "_spectra.svg"},
               {"speed against tv_err", "speed against relmse", "flicker spectra"});
+  if (has_video)
+    doc.Paragraph("Video: [" + slug + kVideoSuffix + "](" + slug + kVideoSuffix +
+                  "): the reference and up to 8 rows of this table (`none` first), each above its signed error "
+                  "against the shot's reference, with the scale in the legend.");
 
   // The shot's best: the lowest tv_err within ±10 % energy (filters only); rows
   // whose interval overlaps its are indistinguishable from it.
@@ -368,7 +372,7 @@ void Document::Figures(std::vector<std::string> files, std::vector<std::string> 
 }
 
 Document BuildDocument(const std::vector<Group>& groups, const std::string& title, std::size_t jobs,
-                       const SgAccuracyTable* sg) {
+                       const SgAccuracyTable* sg, const std::set<std::string>* videos) {
   std::set<std::string> devices;
   for (const Group& g : groups)
     for (const JobResult* r : g.rows) devices.insert(DeviceOf(*r));
@@ -390,7 +394,7 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
       "brackets where the store has one. vs best: the row against the table's lowest `tv_err` within ±10 % "
       "energy (filters, not supersample-N); `≈ indistinguishable` when the intervals overlap, `lower`/"
       "`higher` only when they separate.");
-  for (const Group& g : groups) ShotTable(doc, g);
+  for (const Group& g : groups) ShotTable(doc, g, videos && videos->count(g.key));
   doc.Heading(2, kMethodHeading);
   doc.Paragraph(
       "Metrics are defined in docs/metrics.md: temporal variance of the error against the supersampled reference "

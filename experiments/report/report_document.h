@@ -5,6 +5,7 @@
 
 #include <functional>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -53,8 +54,9 @@ inline constexpr const char* kSgAccuracyHeading = "SG lighting: accuracy of seed
 inline constexpr const char* kSgAccuracyStem = "sg_accuracy";
 
 // `sg`: the SG approximation accuracy section after the overview (null: none).
+// `videos`: the keys of the groups whose grid video lies beside the report.
 Document BuildDocument(const std::vector<Group>& groups, const std::string& title, std::size_t jobs,
-                       const SgAccuracyTable* sg = nullptr);
+                       const SgAccuracyTable* sg = nullptr, const std::set<std::string>* videos = nullptr);
 
 std::string ToMarkdown(const Document& doc);
 // One GitHub-flavoured table ('|' in cells escaped), ending in a newline.

@@ -154,6 +154,19 @@ Status EnsureReference(const Job& job, const RunOptions& options) {
   return Ok();
 }
 
+Result<JobFrames> EnsureJobFrames(const Job& job, const RunOptions& options) {
+  if (job.external) {
+    if (Status s = CheckExternalFrames(job); !s) return s.failure();
+    return JobFrames{job.external->test, job.external->reference};
+  }
+  auto test = JobSettings(job, options);
+  if (!test) return test.failure();
+  if (Status s = EnsureReference(job, options); !s) return s.failure();
+  const fs::path dir = fs::path(options.work_dir) / ("job-" + JobId(job));
+  if (auto rendered = RenderInto(*test, dir); !rendered) return rendered.failure();
+  return JobFrames{dir.string(), ReferenceDirectory(job, options).string()};
+}
+
 Result<JobResult> MeasureJob(const Job& job, const RunOptions& options) {
   if (job.external) return MeasureExternal(job);
   const auto t0 = std::chrono::steady_clock::now();

@@ -14,12 +14,15 @@
 #include <fstream>
 #include <thread>
 
+#include "cli_run.h"
 #include "shimmer/experiments/result_store.h"
 
 namespace shimmer::experiments {
 namespace {
 
 namespace fs = std::filesystem;
+using shimmer::testing::CliRun;
+using shimmer::testing::RunShimmer;
 
 struct Workspace {
   fs::path dir = fs::temp_directory_path() /
@@ -356,6 +359,55 @@ TEST(UserVariantCli, SweepAndFitAFileVariantsParameter) {
   const double j = (*fit)["train"]["j"];
   ASSERT_EQ((*fit)["defaults"].size(), 1u);
   EXPECT_LT(j, (*fit)["defaults"][0]["train"]["j"].get<double>()) << "fp_max = " << (*fit)["value"];
+}
+
+// The example spec experiments/specs/external.json end to end: frames that
+// shimmer renders, measured as if an engine had, equal `shimmer metrics` on
+// the same pair and the rendered variant they came from.
+TEST(ExternalCli, TheExampleSpecMeasuresWhatShimmerMetricsDoes) {
+  Workspace ws;
+  fs::create_directories(ws.dir / "experiments" / "specs");
+  fs::copy_file(fs::path(SHIMMER_SOURCE_DIR) / "experiments/specs/external.json",
+                ws.dir / "experiments/specs/external.json");
+  const std::string cd = "cd " + ws.dir.string() + " && " + SHIMMER_EXE;
+  const std::string shot = " --scene sphere-field --material ggx:0.02 --camera orbit --size 64 64 --frames 24";
+  ASSERT_EQ(std::system((cd + " render" + shot + " --variant tk19 --out runs/external-frames/tk19 >>log.txt 2>&1 && " +
+                         SHIMMER_EXE + " render" + shot +
+                         " --reference-spp 8 --out runs/external-frames/reference >>log.txt 2>&1")
+                            .c_str()),
+            0)
+      << ReadText(ws.dir / "log.txt");
+  const std::string run = cd + " run experiments/specs/external.json --no-check --no-benchmark";
+  ASSERT_EQ(std::system((run + " >>log.txt 2>&1").c_str()), 0) << ReadText(ws.dir / "log.txt");
+  auto store = ResultStore::Open((ws.dir / "runs/external/results.db").string(), ResultStore::Mode::kReadOnly);
+  ASSERT_TRUE(store) << store.error();
+  const std::vector<JobResult> all = *(*store)->All();
+  ASSERT_EQ(all.size(), 4u);
+  const JobResult *rendered = nullptr, *external = nullptr;
+  for (const JobResult& r : all) {
+    if (r.job.variant == "tk19") rendered = &r;
+    if (r.job.external) external = &r;
+  }
+  ASSERT_TRUE(rendered && external);
+  EXPECT_EQ(external->job.variant, "engine-tk19");
+  const CliRun direct = RunShimmer(SHIMMER_EXE, "metrics " + (ws.dir / "runs/external-frames/tk19").string() + " " +
+                                                    (ws.dir / "runs/external-frames/reference").string() +
+                                                    " --highlight-mask --highlight-threshold 0.1 --json");
+  ASSERT_EQ(direct.exit_code, 0) << direct.output;
+  const nlohmann::json metrics = nlohmann::json::parse(direct.output.substr(direct.output.find('{')));
+  for (const char* key : {"tv_err", "tv_ratio", "energy_bias", "relmse", "temporal_diff_err", "pixels", "ci95",
+                          "flicker", "tv_err_floor"})
+    EXPECT_EQ(external->metrics[key], metrics[key]) << key;
+  // The same frames and reference as the spec's own tk19 job.
+  for (const char* key : {"tv_err", "energy_bias", "relmse"})
+    EXPECT_DOUBLE_EQ(external->metrics[key].get<double>(), rendered->metrics[key].get<double>()) << key;
+  ASSERT_EQ(std::system((run + " >resume.txt 2>&1").c_str()), 0);
+  EXPECT_NE(ReadText(ws.dir / "resume.txt").find("(0 computed, 4 already done)"), std::string::npos)
+      << ReadText(ws.dir / "resume.txt");
+  ASSERT_EQ(std::system((cd + " report runs/external/results.db -o report >>log.txt 2>&1").c_str()), 0);
+  const std::string md = ReadText(ws.dir / "report" / "report.md");
+  EXPECT_NE(md.find("## External sequences"), std::string::npos) << md;
+  EXPECT_NE(md.find("| `engine-tk19 (external)` | highlight |"), std::string::npos) << md;
 }
 
 TEST(FitCli, BadFitConfigurationIsRejectedBeforeAnyWork) {

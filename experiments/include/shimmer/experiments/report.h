@@ -6,6 +6,8 @@
 // spectra).
 #pragma once
 
+#include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -22,7 +24,13 @@ std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<
 // Writes the report for `rows` into `out_dir` (created): every file or none
 // (StagedDirectory), report.md last. Plots need gnuplot; without it the
 // scripts and data are still written and a warning names the scripts.
+//
+// `video`, when given, writes one grid MP4 per shot table from the table's
+// rows (in its order: `none` first) to the file it is handed; the table
+// links it (kVideoSuffix after the table's plot stem).
+using ShotVideoWriter = std::function<Status(const std::vector<const JobResult*>& rows, const std::filesystem::path& file)>;
+inline constexpr const char* kVideoSuffix = "_grid.mp4";
 Status WriteReport(const std::vector<JobResult>& rows, const std::string& title, const std::string& out_dir,
-                   std::vector<std::string>* warnings);
+                   std::vector<std::string>* warnings, const ShotVideoWriter& video = {});
 
 }  // namespace shimmer::experiments

@@ -60,6 +60,14 @@ Result<render::RenderSettings> JobSettings(const Job& job, const RunOptions& opt
 // store keeps. Used by the runner and by sweeps and fits.
 Result<JobResult> MeasureJob(const Job& job, const RunOptions& options);
 
+// Where a job's frames and its reference's lie: rendered into the cache
+// unless they are there (an external sequence's are the user's, checked
+// unchanged). For videos of finished jobs, whose frames the run deleted.
+struct JobFrames {
+  std::string test, reference;
+};
+Result<JobFrames> EnsureJobFrames(const Job& job, const RunOptions& options);
+
 // Renders the job's reference into the cache unless it is there.
 Status EnsureReference(const Job& job, const RunOptions& options);
 

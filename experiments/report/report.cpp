@@ -183,22 +183,27 @@ Costs CostsOf(const Group& group) {
   Costs c;
   std::set<std::string> bench_devices, render_devices;
   bool all_bench = true;
+  // An external sequence without a cost has no time at all: it sits off the
+  // front instead of taking the front from every other row.
+  auto timed = [](const JobResult* r) { return !r->job.external || r->cost.has_value(); };
   for (const JobResult* r : group.rows) {
-    if (r->cost)
-      bench_devices.insert(r->cost->device);
-    else
-      all_bench = false;
-    render_devices.insert(DeviceOf(*r));
+    if (timed(r)) {
+      if (r->cost)
+        bench_devices.insert(r->cost->device);
+      else
+        all_bench = false;
+      render_devices.insert(DeviceOf(*r));
+    }
     c.tv_err.push_back(Metric(r->metrics, "tv_err"));
     c.relmse.push_back(Metric(r->metrics, "relmse"));
   }
   if (all_bench && bench_devices.size() == 1) {
     c.source = "benchmark median GPU ms per frame on " + *bench_devices.begin();
-    for (const JobResult* r : group.rows) c.ms.push_back(r->cost->median_ms);
+    for (const JobResult* r : group.rows) c.ms.push_back(timed(r) ? r->cost->median_ms : kNaN);
   } else if (render_devices.size() == 1) {
     c.source = "the metric render's GPU ms per frame on " + *render_devices.begin() +
                " (no benchmark for every row: small renders, noisy)";
-    for (const JobResult* r : group.rows) c.ms.push_back(r->gpu_ms_per_frame);
+    for (const JobResult* r : group.rows) c.ms.push_back(timed(r) ? r->gpu_ms_per_frame : kNaN);
   } else {
     c.source = "none: the rows ran on several devices, whose times are not comparable";
   }
@@ -231,6 +236,7 @@ bool SgLitScene(const std::string& scene) {
 std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<double>& error) {
   std::vector<int> front;
   for (std::size_t i = 0; i < cost.size(); ++i) {
+    if (std::isnan(cost[i])) continue;  // untimed: neither on the front nor dominating
     bool dominated = false;
     for (std::size_t j = 0; j < cost.size() && !dominated; ++j)
       dominated = j != i && cost[j] <= cost[i] && error[j] <= error[i] && (cost[j] < cost[i] || error[j] < error[i]);

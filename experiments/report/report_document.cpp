@@ -268,7 +268,7 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
                                            : "n/a"};
     if (many_devices) row.push_back(r.cost ? r.cost->device : "n/a");
     row.insert(row.end(),
-               {Fmt(r.gpu_ms_per_frame, "%.2f"), costs.front_tv_err[i] ? "●" : "", costs.front_relmse[i] ? "●" : ""});
+               {r.job.external && !(r.gpu_ms_per_frame > 0) ? std::string("n/a") : Fmt(r.gpu_ms_per_frame, "%.2f"), costs.front_tv_err[i] ? "●" : "", costs.front_relmse[i] ? "●" : ""});
     cells.push_back(std::move(row));
   }
   doc.Table(header, cells);
@@ -325,7 +325,7 @@ void ExternalSequencesSection(Document& doc, const std::vector<Group>& groups) {
   if (rows.empty()) return;
   doc.Heading(2, kExternalHeading);
   doc.Paragraph(
-      "These rows are frames rendered elsewhere (spec section `sequences`, docs/experiments.md), each measured "
+      "These rows are frames rendered elsewhere (spec section `sequences`, docs/external.md), each measured "
       "against its own reference with the same metrics, intervals and region rules as the rendered rows, and "
       "labelled `(external)` in every table. A sequence that names a shot the spec renders sits in that shot's "
       "tables, beside its `none`; its ratio to `none` is meaningful only when both references show the same shot. "
@@ -375,7 +375,9 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
                        const SgAccuracyTable* sg, const std::set<std::string>* videos) {
   std::set<std::string> devices;
   for (const Group& g : groups)
-    for (const JobResult* r : g.rows) devices.insert(DeviceOf(*r));
+    for (const JobResult* r : g.rows)
+      if (!r->job.external) devices.insert(DeviceOf(*r));  // shimmer rendered none of those
+  if (devices.empty()) devices.insert("none (external sequences only)");
   std::vector<std::string> device_list(devices.begin(), devices.end());
 
   Document doc;

@@ -127,7 +127,10 @@ void VideoGrid::DrawStatic() {
   labels.insert(labels.begin(), options_.with_reference ? options_.reference_label : "legend");
   for (std::size_t i = 0; i < labels.size(); ++i) {
     const cv::Rect& r = layout_.tiles[i].label;
-    cv::putText(background_, Fitted(labels[i], r.width, 0.5), cv::Point(r.x + 4, r.y + 16), kFont, 0.5, kText, 1,
+    // A long label gets a smaller font before it loses its end.
+    int baseline = 0;
+    const double scale = cv::getTextSize(labels[i], kFont, 0.5, 1, &baseline).width > r.width - 8 ? 0.37 : 0.5;
+    cv::putText(background_, Fitted(labels[i], r.width, scale), cv::Point(r.x + 4, r.y + 16), kFont, scale, kText, 1,
                 cv::LINE_AA);
   }
   // The legend: a horizontal colour bar on the error's own scale, its ends

@@ -373,7 +373,7 @@ TEST(ExternalCli, TheExampleSpecMeasuresWhatShimmerMetricsDoes) {
   const std::string shot = " --scene sphere-field --material ggx:0.02 --camera orbit --size 64 64 --frames 24";
   ASSERT_EQ(std::system((cd + " render" + shot + " --variant tk19 --out runs/external-frames/tk19 >>log.txt 2>&1 && " +
                          SHIMMER_EXE + " render" + shot +
-                         " --reference-spp 8 --out runs/external-frames/reference >>log.txt 2>&1")
+                         " --reference-spp 16 --out runs/external-frames/reference >>log.txt 2>&1")
                             .c_str()),
             0)
       << ReadText(ws.dir / "log.txt");
@@ -408,6 +408,18 @@ TEST(ExternalCli, TheExampleSpecMeasuresWhatShimmerMetricsDoes) {
   const std::string md = ReadText(ws.dir / "report" / "report.md");
   EXPECT_NE(md.find("## External sequences"), std::string::npos) << md;
   EXPECT_NE(md.find("| `engine-tk19 (external)` | highlight |"), std::string::npos) << md;
+  // One grid video per shot table, linked from it; the run's deleted frames rendered again.
+  ASSERT_EQ(std::system((cd + " report runs/external/results.db -o video --video --slow 2 >>log.txt 2>&1").c_str()), 0)
+      << ReadText(ws.dir / "log.txt");
+  const std::string with_video = ReadText(ws.dir / "video" / "report.md");
+  int videos = 0;
+  for (const auto& entry : fs::directory_iterator(ws.dir / "video"))
+    if (entry.path().string().ends_with("_grid.mp4")) {
+      ++videos;
+      EXPECT_GT(fs::file_size(entry.path()), 1000u);
+      EXPECT_NE(with_video.find("(" + entry.path().filename().string() + ")"), std::string::npos) << with_video;
+    }
+  EXPECT_EQ(videos, 1);  // one shot, one derivative source
 }
 
 TEST(FitCli, BadFitConfigurationIsRejectedBeforeAnyWork) {

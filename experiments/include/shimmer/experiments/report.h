@@ -19,6 +19,7 @@ namespace shimmer::experiments {
 
 // Indices of the rows on the Pareto front of (cost, error): no other row is
 // at most as costly and at most as wrong with one of them strictly better.
+// A NaN cost (an untimed row) is neither on the front nor dominates.
 std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<double>& error);
 
 // Writes the report for `rows` into `out_dir` (created): every file or none

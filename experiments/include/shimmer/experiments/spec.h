@@ -92,7 +92,7 @@ struct ShotGroup {
   std::vector<std::string> derivatives;
 };
 
-// An engine's own frames (spec section "sequences"; docs/experiments.md):
+// An engine's own frames (spec section "sequences"; docs/external.md):
 // a test sequence and its reference, measured with the same metrics,
 // intervals and region rules as the rendered jobs and reported beside them,
 // marked external. Paths are resolved against the spec's folder; the hashes

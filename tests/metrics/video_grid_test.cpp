@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "cli_run.h"
 #include "shimmer/metrics/video_grid.h"
 #include "test_sequences.h"
 
@@ -135,6 +136,37 @@ TEST(VideoGrid, RefusesWhatItCannotShow) {
   ASSERT_FALSE(many);
   EXPECT_NE(many.error().find("at most 8 test sequences"), std::string::npos) << many.error();
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "x.mp4"));
+}
+
+TEST(VideoCli, WritesAGridOrRefusesWithOneMessage) {
+  TempDir dir;
+  Write(dir.path() / "a", 0);
+  Write(dir.path() / "b", 1);
+  Write(dir.path() / "ref", 2);
+  const std::string a = (dir.path() / "a").string(), b = (dir.path() / "b").string();
+  const std::string out = (dir.path() / "g.mp4").string();
+  auto run = [](const std::string& args) { return shimmer::testing::RunShimmer(SHIMMER_EXE, "video " + args); };
+  const auto ok = run(a + " " + b + " --reference " + (dir.path() / "ref").string() + " --slow 2 -o " + out);
+  ASSERT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_NE(ok.output.find("3 tiles, 10 frames"), std::string::npos) << ok.output;
+  EXPECT_TRUE(std::filesystem::exists(out));
+  struct Case {
+    std::string args, message;
+  };
+  std::string nine;
+  for (int i = 0; i < 9; ++i) nine += a + " ";
+  const Case cases[] = {
+      {a + " " + b + " --label one -o " + out, "--label must be given once per test sequence (2), got 1"},
+      {nine + "-o " + out, "at most 8 test sequences"},
+      {a + " --slow 0 -o " + out, "--slow must be 1..100"},
+      {(dir.path() / "nope").string() + " -o " + out, "no such file or directory"},
+      {a + " -o " + (dir.path() / "no" / "g.mp4").string(), "does not exist"},
+  };
+  for (const Case& c : cases) {
+    const auto r = run(c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.message), std::string::npos) << c.args << "\n" << r.output;
+  }
 }
 
 }  // namespace

@@ -36,6 +36,9 @@ Result<ResolvedVariant> ResolveVariant(const RenderSettings& s) {
     return R::Failure("variant " + s.variant + " shades spherical-Gaussian lights only, and scene '" + s.scene.name +
                       "' has a " + std::string(shading::LightTypeName(s.scene.light.type)) +
                       " light (use an SG-lit scene such as sg-sphere-field)");
+  if (shading::FiltersNormalMap(info) && !(scene::SceneFeatures(s.scene) & shading::kSceneNormalMaps))
+    return R::Failure("variant " + s.variant + " filters normal maps, and scene '" + s.scene.name +
+                      "' has none (use a scene with a normal map, such as nm-plane)");
   if (info.ggx_only && s.material.ndf != shading::Ndf::kGgx)
     return R::Failure("variant " + s.variant + " filters GGX only; use a ggx material");
   auto params = shading::ResolveParams(info, s.param_overrides);

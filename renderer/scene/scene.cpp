@@ -189,6 +189,11 @@ class FieldReader {
   }
   // A problem with the object as a whole.
   FieldReader& Fail(const std::string& problem) { return FailAt(pointer_.empty() ? "/" : pointer_, problem); }
+  // The first problem another reader (of a nested object) found, already worded.
+  FieldReader& Adopt(const std::string& error) {
+    if (error_.empty()) error_ = error;
+    return *this;
+  }
   bool ok() const { return error_.empty(); }
   const std::string& error() const { return error_; }
 
@@ -322,10 +327,62 @@ Scene SgPlaneScene() {
   return s;
 }
 
+// A built-in procedural normal map (they are generated, so cannot fail to load).
+std::shared_ptr<const NormalMap> Procedural(const std::string& name) {
+  NormalMapSource src;
+  src.procedural = name;
+  return LoadNormalMap(src).value();
+}
+
+Primitive WithMap(Primitive p, const std::string& map, glm::dvec2 scale) {
+  p.normal_map = Procedural(map);
+  p.normal_map_source.procedural = map;
+  p.normal_map_scale = scale;
+  return p;
+}
+
+// Seed 003's case: bumpy detail in a normal map seen at a distance. A
+// grazing plane receding from a few texels per pixel (at 96 x 96) near the
+// camera to hundreds far away, the light low in front of the camera.
+Scene NmPlaneScene() {
+  Scene s;
+  s.name = "nm-plane";
+  s.primitives.push_back(WithMap({Primitive::Type::kPlane, {0, 0, 0}, {0, 0, 0}, 0.0}, "bumps", {0.25, 0.25}));
+  s.light = Directional({0.0, 0.35, -1.0}, 3.0);
+  s.material.alpha = {0.05, 0.05};
+  s.rig = {{0, 0, 0}, 6.0, 12.0, 0.0, 40.0};
+  return s;
+}
+
+// A normal-mapped sphere: the fine bumps minified several texels per pixel.
+Scene NmSphereScene() {
+  Scene s;
+  s.name = "nm-sphere";
+  s.primitives.push_back(WithMap({Primitive::Type::kSphere, {0, 0, 0}, {0, 0, 0}, 1.0}, "bumps-fine", {4, 2}));
+  s.light = Directional({-0.5, 0.6, 0.8}, 3.0);
+  s.material.alpha = {0.05, 0.05};
+  s.rig = {{0, 0, 0}, 4.0, 15.0, 0.0, 35.0};
+  return s;
+}
+
+// Magnification: a close plane whose texels span several pixels, where
+// bilinear Toksvig and LEAN turn blocky and the Gaussian-baked Toksvig map
+// does not (seed 003, Figures 3a and 3b).
+Scene NmMagnifyScene() {
+  Scene s;
+  s.name = "nm-magnify";
+  s.primitives.push_back(WithMap({Primitive::Type::kPlane, {0, 0, 0}, {0, 0, 0}, 0.0}, "bumps", {0.02, 0.02}));
+  s.light = Directional({0.0, 0.8, -0.6}, 3.0);
+  s.material.alpha = {0.05, 0.05};
+  s.rig = {{0, 0, 0}, 2.0, 45.0, 0.0, 40.0};
+  return s;
+}
+
 }  // namespace
 
 std::vector<std::string_view> BuiltinSceneNames() {
-  return {"sphere", "sphere-field", "wires", "bumpy-plane", "sg-sphere-field", "sg-plane", "sg-bumpy-plane"};
+  return {"sphere",          "sphere-field", "wires",          "bumpy-plane", "sg-sphere-field",
+          "sg-plane",        "sg-bumpy-plane", "nm-plane",     "nm-sphere",   "nm-magnify"};
 }
 
 Result<Scene> LoadScene(const std::string& name) {
@@ -336,6 +393,9 @@ Result<Scene> LoadScene(const std::string& name) {
   if (name == "sg-sphere-field") return SgSphereFieldScene();
   if (name == "sg-plane") return SgPlaneScene();
   if (name == "sg-bumpy-plane") return SgBumpyPlaneScene();
+  if (name == "nm-plane") return NmPlaneScene();
+  if (name == "nm-sphere") return NmSphereScene();
+  if (name == "nm-magnify") return NmMagnifyScene();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(name, ec)) {
     std::string list;
@@ -353,6 +413,55 @@ Result<Scene> ParseSceneJson(std::string_view text, const std::string& source) {
   if (!json) return json.failure();
   return SceneFromJson(*json, source);
 }
+
+namespace {
+
+// Total texel words of a scene's maps: word indices are floats in the
+// kernel, exact below 2^24.
+constexpr std::size_t kMaxNormalMapWords = std::size_t(1) << 24;
+
+// "normal_map": {"file": F | "procedural": NAME, "scale": [u, v], "strength": s}
+// on any primitive; a relative file is found beside the scene file.
+void ReadNormalMap(FieldReader& r, const nlohmann::json& pj, const std::string& source, const std::string& pointer,
+                   Primitive* p) {
+  if (!r.ok() || !pj.contains("normal_map")) return;
+  const std::string at = pointer + "/normal_map";
+  const auto& mj = pj["normal_map"];
+  if (!mj.is_object()) {
+    r.FailKey("normal_map", "must be an object with 'file' or 'procedural'");
+    return;
+  }
+  FieldReader m(mj, source, at);
+  NormalMapSource src;
+  m.Keys({"file", "procedural", "scale", "strength"}).String("file", &src.file).String("procedural", &src.procedural);
+  m.Number("strength", &src.strength, 0, 10);
+  if (m.ok() && src.file.empty() == src.procedural.empty()) m.Fail("needs exactly one of 'file' and 'procedural'");
+  if (m.ok() && mj.contains("scale")) {
+    const auto& v = mj["scale"];
+    const bool pair = v.is_array() && v.size() == 2 && v[0].is_number() && v[1].is_number();
+    const glm::dvec2 scale = pair ? glm::dvec2(v[0].get<double>(), v[1].get<double>()) : glm::dvec2(0);
+    if (!pair || !(scale.x > 0 && scale.y > 0 && scale.x <= 1e6 && scale.y <= 1e6))
+      m.FailKey("scale", "must be an array of 2 numbers in (0, 1e6]: repeats of the map per uv unit");
+    else
+      p->normal_map_scale = scale;
+  }
+  if (m.ok() && !src.file.empty() && std::filesystem::path(src.file).is_relative())
+    src.file = (std::filesystem::path(source).parent_path() / src.file).string();
+  if (m.ok() && p->bump_slope > 0) m.Fail("a plane with 'bump_slope' has its own normal pattern; drop one of them");
+  if (!m.ok()) {
+    r.Adopt(m.error());
+    return;
+  }
+  auto map = LoadNormalMap(src);
+  if (!map) {
+    r.Adopt(source + ": " + at + ": " + map.error());
+    return;
+  }
+  p->normal_map = *map;
+  p->normal_map_source = src;
+}
+
+}  // namespace
 
 Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) {
   using R = Result<Scene>;
@@ -378,18 +487,18 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
     Primitive p;
     if (type == "sphere") {
       p.type = Primitive::Type::kSphere;
-      r.Keys({"type", "center", "radius"}).Require("center");
+      r.Keys({"type", "center", "radius", "normal_map"}).Require("center");
       r.Vec3("center", &p.a).Number("radius", &p.radius, 0, kMaxCoordinate, true);
     } else if (type == "capsule") {
       p.type = Primitive::Type::kCapsule;
       p.radius = 0.02;
-      r.Keys({"type", "a", "b", "radius"}).Require("a").Require("b");
+      r.Keys({"type", "a", "b", "radius", "normal_map"}).Require("a").Require("b");
       r.Vec3("a", &p.a).Vec3("b", &p.b).Number("radius", &p.radius, 0, kMaxCoordinate, true);
       if (r.ok() && glm::length(p.b - p.a) < 1e-9) r.FailKey("b", "coincides with 'a': a capsule needs two ends");
     } else if (type == "plane") {
       p.type = Primitive::Type::kPlane;
       p.radius = 0;
-      r.Keys({"type", "height", "bump_slope", "bump_frequency"});
+      r.Keys({"type", "height", "bump_slope", "bump_frequency", "normal_map"});
       r.Number("height", &p.radius, -kMaxCoordinate, kMaxCoordinate)
           .Number("bump_slope", &p.bump_slope, 0, 10)
           .Number("bump_frequency", &p.bump_frequency, 0, 1e4);
@@ -398,9 +507,21 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
     } else {
       r.FailKey("type", "unknown type '" + type + "' (sphere, capsule, plane)");
     }
+    ReadNormalMap(r, pj, source, pointer, &p);
     if (!r.ok()) return R::Failure(r.error());
     s.primitives.push_back(p);
   }
+  std::vector<const NormalMap*> maps;
+  std::size_t map_words = 0;
+  for (const Primitive& p : s.primitives)
+    if (p.normal_map && std::find(maps.begin(), maps.end(), p.normal_map.get()) == maps.end()) {
+      maps.push_back(p.normal_map.get());
+      for (const NormalMapLevel& level : p.normal_map->levels) map_words += 3 * level.texels.size();
+    }
+  if (map_words > kMaxNormalMapWords)
+    return R::Failure(source + ": /primitives: the normal maps' mip chains take " + std::to_string(map_words / 3) +
+                      " texels; at most " + std::to_string(kMaxNormalMapWords / 3) +
+                      " fit (about one 2048 x 2048 map; use smaller maps)");
   if (j.contains("light")) {
     const auto& lj = j["light"];
     if (!lj.is_object()) return R::Failure(source + ": /light: must be an object");
@@ -537,6 +658,7 @@ int SceneFeatures(const Scene& scene) {
   using namespace shading;
   int mask = 0;
   for (const Primitive& p : scene.primitives) {
+    if (p.normal_map) mask |= kSceneNormalMaps;
     if (p.type == Primitive::Type::kSphere) mask |= kSceneSpheres;
     if (p.type == Primitive::Type::kCapsule) mask |= kSceneCapsules;
     if (p.type == Primitive::Type::kPlane) mask |= kScenePlanes | (p.bump_slope != 0 ? kSceneBumps : 0);
@@ -558,13 +680,52 @@ std::vector<glm::vec4> PackScene(const Scene& scene) {
     words.push_back({float(n.box.lo.x), float(n.box.lo.y), float(n.box.lo.z), float(n.skip)});
     words.push_back({float(n.box.hi.x), float(n.box.hi.y), float(n.box.hi.z), float(n.prim + 1)});  // 0: interior
   }
-  auto push = [&words](const Primitive& p) {
+  std::vector<const Primitive*> packed;
+  for (int i : order) packed.push_back(&bounded[i]);
+  for (const Primitive& p : unbounded) packed.push_back(&p);
+  // Normal maps (normal_map.glsl's layout): one header per mapped primitive
+  // (its scale is its own), then each map's texels once however many
+  // primitives share it.
+  std::vector<const NormalMap*> maps;
+  std::vector<int> header_word(packed.size(), 0);
+  int next = first_prim_word + 3 * static_cast<int>(packed.size());
+  for (std::size_t k = 0; k < packed.size(); ++k) {
+    const NormalMap* map = packed[k]->normal_map.get();
+    if (!map) continue;
+    header_word[k] = next;
+    next += 2 + static_cast<int>(map->levels.size());
+    if (std::find(maps.begin(), maps.end(), map) == maps.end()) maps.push_back(map);
+  }
+  std::vector<std::vector<int>> level_word(maps.size());
+  for (std::size_t m = 0; m < maps.size(); ++m)
+    for (const NormalMapLevel& level : maps[m]->levels) {
+      level_word[m].push_back(next);
+      next += 3 * static_cast<int>(level.texels.size());
+    }
+  for (std::size_t k = 0; k < packed.size(); ++k) {
+    const Primitive& p = *packed[k];
     words.push_back(PrimWord0(p));
-    words.push_back({float(p.a.x), float(p.a.y), float(p.a.z), 0.0f});
+    words.push_back({float(p.a.x), float(p.a.y), float(p.a.z), float(header_word[k])});
     words.push_back({float(p.b.x), float(p.b.y), float(p.b.z), 0.0f});
-  };
-  for (int i : order) push(bounded[i]);
-  for (const Primitive& p : unbounded) push(p);
+  }
+  for (std::size_t k = 0; k < packed.size(); ++k) {
+    const NormalMap* map = packed[k]->normal_map.get();
+    if (!map) continue;
+    const std::size_t m = std::size_t(std::find(maps.begin(), maps.end(), map) - maps.begin());
+    const NormalMapLevel& top = map->levels.front();
+    words.push_back({float(map->levels.size()), float(top.width), float(top.height), 0.0f});
+    const glm::dvec2 scale = packed[k]->normal_map_scale;
+    words.push_back({float(scale.x), float(scale.y), 0.0f, 0.0f});
+    for (std::size_t l = 0; l < map->levels.size(); ++l)
+      words.push_back({float(level_word[m][l]), float(map->levels[l].width), float(map->levels[l].height), 0.0f});
+  }
+  for (const NormalMap* map : maps)
+    for (const NormalMapLevel& level : map->levels)
+      for (const NormalMapTexel& t : level.texels) {
+        words.push_back({t.mean_normal.x, t.mean_normal.y, t.mean_normal.z, t.toksvig_ft});
+        words.push_back({t.b.x, t.b.y, t.m.x, t.m.y});
+        words.push_back({t.m.z, 0.0f, 0.0f, 0.0f});
+      }
   return words;
 }
 

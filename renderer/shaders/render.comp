@@ -108,28 +108,37 @@ void put3(int ch, int idx, vec3 v) { put(ch, idx, v.x); put(ch + 1, idx, v.y); p
 vec3 get3(int ch, int idx) { return vec3(get(ch, idx), get(ch + 1, idx), get(ch + 2, idx)); }
 float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
 
-// What a quad neighbour shares: the fields quadFootprint differences.
-SurfaceSample partialSample(int prim, vec2 hpp, vec3 n, vec3 ng) {
+// The normal-map filter of VARIANT_ID (normal_map.glsl), NMF_NONE for most.
+const int NM_FILTER = VARIANT_ID / NMF_STRIDE;
+
+// What a quad neighbour shares: the fields quadFootprint differences, and for
+// a normal-map filter the uv of the texture footprint and the point, where
+// the filtered normal is read again.
+SurfaceSample partialSample(int prim, vec2 hpp, vec3 n, vec3 ng, vec2 uv, vec3 p) {
   SurfaceSample s = missedSample();
   s.prim = prim;
   s.hpp = hpp;
   s.n = n;
   s.ng = ng;
+  s.uv = uv;
+  s.p = p;
   return s;
 }
 
 SurfaceSample swapHorizontal(SurfaceSample s) {
   return partialSample(subgroupQuadSwapHorizontal(s.prim), subgroupQuadSwapHorizontal(s.hpp),
-                       subgroupQuadSwapHorizontal(s.n), subgroupQuadSwapHorizontal(s.ng));
+                       subgroupQuadSwapHorizontal(s.n), subgroupQuadSwapHorizontal(s.ng),
+                       subgroupQuadSwapHorizontal(s.uv), subgroupQuadSwapHorizontal(s.p));
 }
 SurfaceSample swapVertical(SurfaceSample s) {
   return partialSample(subgroupQuadSwapVertical(s.prim), subgroupQuadSwapVertical(s.hpp),
-                       subgroupQuadSwapVertical(s.n), subgroupQuadSwapVertical(s.ng));
+                       subgroupQuadSwapVertical(s.n), subgroupQuadSwapVertical(s.ng),
+                       subgroupQuadSwapVertical(s.uv), subgroupQuadSwapVertical(s.p));
 }
 // subgroupQuadBroadcast needs a constant lane, hence a macro.
-#define broadcastLane(s, L)                                                            \
-  partialSample(subgroupQuadBroadcast(s.prim, L), subgroupQuadBroadcast(s.hpp, L), \
-                subgroupQuadBroadcast(s.n, L), subgroupQuadBroadcast(s.ng, L))
+#define broadcastLane(s, L)                                                                                   \
+  partialSample(subgroupQuadBroadcast(s.prim, L), subgroupQuadBroadcast(s.hpp, L), subgroupQuadBroadcast(s.n, L), \
+                subgroupQuadBroadcast(s.ng, L), subgroupQuadBroadcast(s.uv, L), subgroupQuadBroadcast(s.p, L))
 
 void writeAovs(int idx, ivec2 px, SurfaceSample s, PixelShade sh, Camera prev) {
   vec2 motion = vec2(0.0);
@@ -249,21 +258,42 @@ void main() {
     Ray ray = cameraRay(c, pixelCentre(px));
     SurfaceSample s = traceRay(ray, light);
     ShadingFootprint f;
+    // A normal-map filter reads the map with the pixel's uv footprint and
+    // differences the normals it filtered (renderPixelOracle in pixel.glsl).
+    NormalMapFilter nf = levelZeroFilter();
     if (DERIV_MODE == DERIV_ANALYTIC) {
-      f = analyticFootprint(s, ray, light);
+      if (NM_FILTER != NMF_NONE) {
+        nf = analyticNormalMapFilter(NM_FILTER, s, ray);
+        s = filteredSample(s, c.pos, light, nf);
+      }
+      f = analyticFootprintFiltered(s, ray, light, nf);
     } else if (DERIV_MODE == DERIV_QUAD_FINE) {
       bool right = (lane & 1u) != 0u;
       bool bottom = (lane & 2u) != 0u;
       SurfaceSample h = quadNeighbour(s, swapHorizontal(s), c, light, px + ivec2(right ? -1 : 1, 0));
       SurfaceSample v = quadNeighbour(s, swapVertical(s), c, light, px + ivec2(0, bottom ? -1 : 1));
+      if (NM_FILTER != NMF_NONE) {
+        nf = quadNormalMapFilter(NM_FILTER, s, right ? h : s, right ? s : h, bottom ? v : s, bottom ? s : v);
+        s = filteredSample(s, c.pos, light, nf);
+        h = filteredSample(h, c.pos, light, nf);
+        v = filteredSample(v, c.pos, light, nf);
+      }
       f = quadFootprint(s, right ? h : s, right ? s : h, bottom ? v : s, bottom ? s : v);
     } else {
       ivec2 q = px - ivec2(int(lane & 1u), int(lane >> 1u));
       SurfaceSample s0 = quadNeighbour(s, broadcastLane(s, 0u), c, light, q);
       SurfaceSample s1 = quadNeighbour(s, broadcastLane(s, 1u), c, light, q + ivec2(1, 0));
       SurfaceSample s2 = quadNeighbour(s, broadcastLane(s, 2u), c, light, q + ivec2(0, 1));
+      if (NM_FILTER != NMF_NONE) {
+        nf = quadNormalMapFilter(NM_FILTER, s, s0, s1, s0, s2);
+        s = filteredSample(s, c.pos, light, nf);
+        s0 = filteredSample(s0, c.pos, light, nf);
+        s1 = filteredSample(s1, c.pos, light, nf);
+        s2 = filteredSample(s2, c.pos, light, nf);
+      }
       f = quadFootprint(s, s0, s1, s0, s2);
     }
+    if (NM_FILTER != NMF_NONE) m.alpha = normalMapAlphaAt(s, nf, m.alpha);
     FilteredNdf ndf = runVariant(m.ndf, m.alpha, f, vp);
     PixelShade sh = shadeSample(s, f, ndf, m, light, VARIANT_ID, vp, QUADRATURE);
     if (!inside) return;

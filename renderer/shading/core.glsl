@@ -7,5 +7,6 @@
 #include "brdf.glsl"
 #include "sg.glsl"
 #include "sg_light.glsl"
+#include "normal_map.glsl"
 #include "scene.glsl"
 #include "pixel.glsl"

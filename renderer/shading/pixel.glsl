@@ -43,6 +43,8 @@ struct SurfaceSample {
   vec3 l;  // unit direction to the light
   vec3 irradiance;
   vec2 hpp;  // slope-space half vector h.xy / h.z in (tangent, bitangent, n) (seed 000)
+  vec2 uv;   // texture coordinates of a normal-mapped primitive (scene.glsl), else 0
+  real uPeriod;
 };
 
 vec3 lightDirection(Light light, vec3 p) {
@@ -82,18 +84,27 @@ SurfaceSample missedSample() {
   s.l = s.p;
   s.irradiance = s.p;
   s.hpp = vec2(real(0), real(0));
+  s.uv = s.hpp;
+  s.uPeriod = real(0);
   return s;
 }
 
 // Surface attributes of primitive `prim` at point p (p may lie off the
-// surface when a neighbour's ray is continued on this primitive).
-SurfaceSample surfaceOfPrim(Prim pr, int prim, vec3 p, vec3 eye, Light light) {
+// surface when a neighbour's ray is continued on this primitive), its normal
+// map read through filter nf.
+SurfaceSample surfaceOfPrimFiltered(Prim pr, int prim, vec3 p, vec3 eye, Light light, NormalMapFilter nf) {
   SurfaceSample s;
   s.prim = prim;
   s.p = p;
   s.t = length(eye - p);
   s.ng = geometricNormalAt(pr, p);
-  s.n = shadingNormalAt(pr, p);
+  s.n = shadingNormalFiltered(pr, p, nf);
+  s.uv = vec2(real(0), real(0));
+  s.uPeriod = real(0);
+  if (isMapped(pr)) {
+    s.uv = surfaceUv(pr, p);
+    s.uPeriod = surfaceUPeriod(pr);
+  }
   s.tangent = normalize(cross(tangentAxis(pr, s.n), s.n));
   s.bitangent = cross(s.n, s.tangent);
   s.v = safeNormalize(eye - p, s.n);
@@ -105,8 +116,19 @@ SurfaceSample surfaceOfPrim(Prim pr, int prim, vec3 p, vec3 eye, Light light) {
   return s;
 }
 
+SurfaceSample surfaceOfPrim(Prim pr, int prim, vec3 p, vec3 eye, Light light) {
+  return surfaceOfPrimFiltered(pr, prim, p, eye, light, levelZeroFilter());
+}
+
 SurfaceSample surfaceAt(int prim, vec3 p, vec3 eye, Light light) {
   return surfaceOfPrim(loadPrim(prim), prim, p, eye, light);
+}
+
+// Sample s (of any primitive) seen through normal-map filter nf; a missed
+// sample stays missed.
+SurfaceSample filteredSample(SurfaceSample s, vec3 eye, Light light, NormalMapFilter nf) {
+  if (s.prim < 0) return s;
+  return surfaceOfPrimFiltered(loadPrim(s.prim), s.prim, s.p, eye, light, nf);
 }
 
 SurfaceSample surfaceOfHit(Hit hit, Ray r, Light light) {
@@ -152,6 +174,21 @@ ShadingFootprint quadFootprint(SurfaceSample s, SurfaceSample x0, SurfaceSample 
   return f;
 }
 
+// The quad's uv differences: what a pixel shader's texture fetch takes as
+// its footprint. u wraps on spheres and capsules.
+real wrappedDifference(real d, real period) { return period > real(0) ? d - period * floor(d / period + real(0.5)) : d; }
+
+NormalMapFilter quadNormalMapFilter(int mode, SurfaceSample s, SurfaceSample x0, SurfaceSample x1, SurfaceSample y0,
+                                    SurfaceSample y1) {
+  NormalMapFilter nf;
+  nf.mode = mode;
+  vec2 dx = x1.uv - x0.uv;
+  vec2 dy = y1.uv - y0.uv;
+  nf.duvdx = vec2(wrappedDifference(dx.x, s.uPeriod), dx.y);
+  nf.duvdy = vec2(wrappedDifference(dy.x, s.uPeriod), dy.y);
+  return nf;
+}
+
 ShadingFootprint zeroFootprint(SurfaceSample s) {
   ShadingFootprint f;
   vec3 z = vec3(real(0), real(0), real(0));
@@ -186,25 +223,47 @@ vec2 hppDerivative(SurfaceSample s, Prim pr, Light light, vec3 dp, vec3 dn) {
 }
 
 // Ray differentials transferred to the hit point (Igehy 1999, origin fixed):
-// dp = t dd - d (t dd . ng) / (d . ng), then through the surface to n and hpp.
-ShadingFootprint analyticFootprint(SurfaceSample s, Ray r, Light light) {
+// dp = t dd - d (t dd . ng) / (d . ng).
+vec3 surfaceDifferential(SurfaceSample s, Ray r, vec3 dd) {
+  real dn = guardedZ(dot(r.d, s.ng));
+  vec3 dp = dd * s.t;
+  return dp - r.d * (dot(dp, s.ng) / dn);
+}
+
+// The uv footprint from the ray differentials: d uv = (grad u . dp, grad v . dp).
+NormalMapFilter analyticNormalMapFilter(int mode, SurfaceSample s, Ray r) {
+  NormalMapFilter nf = levelZeroFilter();
+  nf.mode = mode;
+  if (s.prim < 0) return nf;
+  UvGradient g = surfaceUvGradient(loadPrim(s.prim), s.p);
+  vec3 dpx = surfaceDifferential(s, r, r.ddx);
+  vec3 dpy = surfaceDifferential(s, r, r.ddy);
+  nf.duvdx = vec2(dot(g.du, dpx), dot(g.dv, dpx));
+  nf.duvdy = vec2(dot(g.du, dpy), dot(g.dv, dpy));
+  return nf;
+}
+
+// dp from the ray differentials, then through the surface to n and hpp; the
+// shading normal's change as filter nf reads the normal map.
+ShadingFootprint analyticFootprintFiltered(SurfaceSample s, Ray r, Light light, NormalMapFilter nf) {
   if (s.prim < 0) return zeroFootprint(s);
   Prim pr = loadPrim(s.prim);
-  real dn = guardedZ(dot(r.d, s.ng));
-  vec3 dpx = r.ddx * s.t;
-  dpx = dpx - r.d * (dot(dpx, s.ng) / dn);
-  vec3 dpy = r.ddy * s.t;
-  dpy = dpy - r.d * (dot(dpy, s.ng) / dn);
+  vec3 dpx = surfaceDifferential(s, r, r.ddx);
+  vec3 dpy = surfaceDifferential(s, r, r.ddy);
   ShadingFootprint f;
   f.hpp = s.hpp;
   f.n = s.n;
-  f.dn_dx = shadingNormalDeriv(pr, s.p, dpx);
-  f.dn_dy = shadingNormalDeriv(pr, s.p, dpy);
+  f.dn_dx = shadingNormalDerivFiltered(pr, s.p, dpx, nf);
+  f.dn_dy = shadingNormalDerivFiltered(pr, s.p, dpy, nf);
   f.dng_dx = geometricNormalDeriv(pr, s.p, dpx);
   f.dng_dy = geometricNormalDeriv(pr, s.p, dpy);
   f.dhpp_dx = hppDerivative(s, pr, light, dpx, f.dn_dx);
   f.dhpp_dy = hppDerivative(s, pr, light, dpy, f.dn_dy);
   return f;
+}
+
+ShadingFootprint analyticFootprint(SurfaceSample s, Ray r, Light light) {
+  return analyticFootprintFiltered(s, r, light, levelZeroFilter());
 }
 
 struct PixelShade {
@@ -279,6 +338,14 @@ PixelShade shadeSample(SurfaceSample s, ShadingFootprint f, FilteredNdf ndf, Mat
   return o;
 }
 
+// The material roughness a normal-map filter widens to at sample s.
+vec2 normalMapAlphaAt(SurfaceSample s, NormalMapFilter nf, vec2 alpha) {
+  if (s.prim < 0) return alpha;
+  Prim pr = loadPrim(s.prim);
+  if (!isMapped(pr)) return alpha;
+  return normalMapAlpha(nf.mode, normalMapStats(pr.map, nf, s.uv), alpha);
+}
+
 vec2 pixelCentre(ivec2 px) { return vec2(real(px.x) + real(0.5), real(px.y) + real(0.5)); }
 
 // The sample of the neighbour pixel px as the quad sees it from s: its own
@@ -300,10 +367,16 @@ struct PixelResult {
 PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, int derivMode, VariantParams vp,
                               ivec2 px) {
   PixelResult r;
+  int nmf = normalMapFilterOf(variant);
+  NormalMapFilter nf = levelZeroFilter();
   Ray ray = cameraRay(c, pixelCentre(px));
   r.s = traceRay(ray, light);
   if (r.s.prim < 0 || derivMode == DERIV_ANALYTIC) {
-    r.f = analyticFootprint(r.s, ray, light);
+    if (nmf != NMF_NONE) {
+      nf = analyticNormalMapFilter(nmf, r.s, ray);
+      r.s = filteredSample(r.s, c.pos, light, nf);
+    }
+    r.f = analyticFootprintFiltered(r.s, ray, light, nf);
   } else {
     ivec2 q = ivec2((px.x / 2) * 2, (px.y / 2) * 2);
     int ox = px.x - q.x;
@@ -320,8 +393,19 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
     SurfaceSample x1 = quadNeighbour(r.s, traceRay(cameraRay(c, pixelCentre(px1)), light), c, light, px1);
     SurfaceSample y0 = quadNeighbour(r.s, traceRay(cameraRay(c, pixelCentre(py0)), light), c, light, py0);
     SurfaceSample y1 = quadNeighbour(r.s, traceRay(cameraRay(c, pixelCentre(py1)), light), c, light, py1);
+    if (nmf != NMF_NONE) {
+      // The texture fetch takes its footprint from the quad's uv; the
+      // normal's differences are then those of the filtered normals.
+      nf = quadNormalMapFilter(nmf, r.s, x0, x1, y0, y1);
+      r.s = filteredSample(r.s, c.pos, light, nf);
+      x0 = filteredSample(x0, c.pos, light, nf);
+      x1 = filteredSample(x1, c.pos, light, nf);
+      y0 = filteredSample(y0, c.pos, light, nf);
+      y1 = filteredSample(y1, c.pos, light, nf);
+    }
     r.f = quadFootprint(r.s, x0, x1, y0, y1);
   }
+  if (nmf != NMF_NONE) m.alpha = normalMapAlphaAt(r.s, nf, m.alpha);
   r.ndf = evalVariant(variant, m.ndf, m.alpha, r.f, vp);
   r.shade = shadeSample(r.s, r.f, r.ndf, m, light, variant, vp, vec4(real(-1), real(0), real(0), real(0)));
   return r;

@@ -10,8 +10,10 @@
 //     node, `skip` is the node after its subtree (a stackless walk: no local
 //     arrays, which SIMD CPU drivers such as lavapipe handle slowly)
 //   prim j, words firstPrimWord + 3j ..
-//                                (type, radius or height, bumpSlope, bumpFrequency), (a, 0), (b, 0)
+//                                (type, radius or height, bumpSlope, bumpFrequency), (a, map), (b, 0)
+//                                map: the word of the primitive's normal-map header (normal_map.glsl), 0: none
 // Unbounded primitives (planes) follow the BVH's primitives and are always tested.
+// Normal-map headers and texels follow the primitives.
 // The includer provides `vec4 sceneWord(int i)` and defines SHIMMER_SCENE_WORDS;
 // without it (stand-alone compile checks) the scene is empty.
 #ifndef SHIMMER_SCENE_WORDS
@@ -31,8 +33,9 @@ const int SCENE_SPHERES = 1;
 const int SCENE_CAPSULES = 2;
 const int SCENE_PLANES = 4;
 const int SCENE_BUMPS = 8;  // planes with a normal pattern
+const int SCENE_NORMAL_MAPS = 16;  // primitives with a normal map
 #ifndef SHIMMER_SCENE_FEATURES
-const int SCENE_FEATURES = SCENE_SPHERES | SCENE_CAPSULES | SCENE_PLANES | SCENE_BUMPS;
+const int SCENE_FEATURES = SCENE_SPHERES | SCENE_CAPSULES | SCENE_PLANES | SCENE_BUMPS | SCENE_NORMAL_MAPS;
 #endif
 const real RAY_TMIN = real(1e-4);
 const real RAY_TMAX = real(1e30);
@@ -98,12 +101,14 @@ struct Prim {
   real bumpFreq;   // plane: angular frequency of the base wave (radians per unit)
   vec3 a;          // sphere centre; capsule end
   vec3 b;          // capsule end
+  int map;         // normal-map header word, 0: none
 };
 
 bool isSphere(Prim p) { return (SCENE_FEATURES & SCENE_SPHERES) != 0 && p.type == PRIM_SPHERE; }
 bool isCapsule(Prim p) { return (SCENE_FEATURES & SCENE_CAPSULES) != 0 && p.type == PRIM_CAPSULE; }
 bool isPlane(Prim p) { return (SCENE_FEATURES & SCENE_PLANES) != 0 && p.type == PRIM_PLANE; }
 bool isBumpy(Prim p) { return (SCENE_FEATURES & SCENE_BUMPS) != 0 && p.type == PRIM_PLANE && p.bumpSlope != real(0); }
+bool isMapped(Prim p) { return (SCENE_FEATURES & SCENE_NORMAL_MAPS) != 0 && p.map > 0; }
 
 int scenePrimWord(int index) { return int(sceneWord(0).z) + 3 * index; }
 
@@ -119,6 +124,7 @@ Prim loadPrim(int index) {
   p.bumpFreq = w0.w;
   p.a = vec3(w1.x, w1.y, w1.z);
   p.b = vec3(w2.x, w2.y, w2.z);
+  p.map = int(w1.w);
   return p;
 }
 
@@ -454,18 +460,6 @@ vec3 geometricNormalDeriv(Prim p, vec3 q, vec3 dq) {
   return vec3(real(0), real(0), real(0));
 }
 
-vec3 shadingNormalAt(Prim p, vec3 q) {
-  if (!isBumpy(p)) return geometricNormalAt(p, q);
-  vec2 g = bumpGradient(p, q);
-  return normalize(vec3(-g.x, real(1), -g.y));
-}
-
-vec3 shadingNormalDeriv(Prim p, vec3 q, vec3 dq) {
-  if (!isBumpy(p)) return geometricNormalDeriv(p, q, dq);
-  vec2 g = bumpGradient(p, q);
-  vec2 dg = bumpGradientDeriv(p, q, dq);
-  return dNormalize(vec3(-g.x, real(1), -g.y), vec3(-dg.x, real(0), -dg.y));
-}
 
 // Reference axis of the tangent frame: anisotropic roughness ax runs along
 // cross(axis, n) (around a sphere's pole, around a capsule, along x on a plane).
@@ -476,4 +470,105 @@ vec3 tangentAxis(Prim p, vec3 n) {
   vec3 c = cross(axis, n);
   if (dot(c, c) < real(1e-12)) axis = vec3(real(1), real(0), real(0));
   return axis;
+}
+
+// ---- texture coordinates and normal maps ------------------------------------
+// uv of each primitive, before the map's scale (docs/scenes.md):
+//   plane: u, v = world distance along the tangent and bitangent (1 unit = 1);
+//   sphere: u = longitude / 2 pi around +y, v = latitude from the south pole / pi;
+//   capsule: u = angle around the axis / 2 pi, v = distance along the axis from a.
+// u and v grow along the tangent frame's tangent and bitangent (those of
+// tangentAxis), so a tangent-space normal (x, y, z) is x t + y b + z n.
+
+struct GeometricFrame {
+  vec3 t;
+  vec3 b;
+  vec3 n;
+};
+
+GeometricFrame geometricFrame(Prim p, vec3 q) {
+  GeometricFrame f;
+  f.n = geometricNormalAt(p, q);
+  f.t = normalize(cross(tangentAxis(p, f.n), f.n));
+  f.b = cross(f.n, f.t);
+  return f;
+}
+
+// A unit vector perpendicular to the capsule axis u: the angle's zero.
+vec3 capsuleZeroDirection(vec3 u) {
+  vec3 ref = abs(u.x) < real(0.9) ? vec3(real(1), real(0), real(0)) : vec3(real(0), real(1), real(0));
+  return normalize(cross(u, ref));
+}
+
+vec2 surfaceUv(Prim p, vec3 q) {
+  if (isSphere(p)) {
+    vec3 d = safeNormalize(q - p.a, vec3(real(0), real(1), real(0)));
+    return vec2(atan(-d.z, d.x) / (real(2) * PI), real(1) - acos(clamp(d.y, real(-1), real(1))) / PI);
+  }
+  if (isCapsule(p)) {
+    vec3 u = normalize(p.b - p.a);
+    vec3 e1 = capsuleZeroDirection(u);
+    vec3 e2 = cross(u, e1);
+    vec3 d = q - capsuleAxisPoint(p, q);
+    return vec2(atan(dot(d, e2), dot(d, e1)) / (real(2) * PI), dot(q - p.a, u));
+  }
+  GeometricFrame f = geometricFrame(p, q);
+  return vec2(dot(q, f.t), dot(q, f.b));
+}
+
+// The period of u (spheres and capsules wrap around once per unit of u):
+// quad differences of u are taken modulo it.
+real surfaceUPeriod(Prim p) { return isSphere(p) || isCapsule(p) ? real(1) : real(0); }
+
+// d uv / d q for a move along the surface: gradients of u and of v.
+struct UvGradient {
+  vec3 du;
+  vec3 dv;
+};
+
+UvGradient surfaceUvGradient(Prim p, vec3 q) {
+  GeometricFrame f = geometricFrame(p, q);
+  UvGradient g;
+  g.du = f.t;
+  g.dv = f.b;
+  if (isSphere(p)) {
+    vec3 d = q - p.a;
+    real rho = max(length(vec2(d.x, d.z)), p.radius * real(1e-6));
+    g.du = f.t / (real(2) * PI * rho);
+    g.dv = f.b / (PI * p.radius);
+  }
+  if (isCapsule(p)) {
+    g.du = f.t / (real(2) * PI * p.radius);
+    g.dv = normalize(p.b - p.a);
+  }
+  return g;
+}
+
+// The shading normal at q: the primitive's own (bump pattern or geometric)
+// or its normal map read by filter nf.
+vec3 shadingNormalFiltered(Prim p, vec3 q, NormalMapFilter nf) {
+  if (isMapped(p)) {
+    GeometricFrame f = geometricFrame(p, q);
+    vec3 tn = normalMapNormal(nf.mode, normalMapStats(p.map, nf, surfaceUv(p, q)));
+    return safeNormalize(f.t * tn.x + f.b * tn.y + f.n * tn.z, f.n);
+  }
+  if (!isBumpy(p)) return geometricNormalAt(p, q);
+  vec2 g = bumpGradient(p, q);
+  return normalize(vec3(-g.x, real(1), -g.y));
+}
+
+vec3 shadingNormalAt(Prim p, vec3 q) { return shadingNormalFiltered(p, q, levelZeroFilter()); }
+
+// d(shading normal) for a move dq on the surface. A mapped normal is a
+// texture, not a closed form: its change is the central difference over the
+// move, as the pixel's own footprint sees it.
+vec3 shadingNormalDerivFiltered(Prim p, vec3 q, vec3 dq, NormalMapFilter nf) {
+  if (isMapped(p)) {
+    vec3 h = dq * real(0.5);
+    return shadingNormalFiltered(p, q + h, nf) - shadingNormalFiltered(p, q - h, nf);
+  }
+  if (!isBumpy(p)) return geometricNormalDeriv(p, q, dq);
+  vec2 g = bumpGradient(p, q);
+  vec2 dg = bumpGradientDeriv(p, q, dq);
+  return dNormalize(vec3(-g.x, real(1), -g.y), vec3(-dg.x, real(0), -dg.y));
 }

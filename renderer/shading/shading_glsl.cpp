@@ -46,7 +46,8 @@ static_assert(kPixelCandidates == glsl_f32::PIXEL_CANDIDATES);
 static_assert(kFirstSgVariant == glsl_f32::VARIANT_SG_WARP && kLastSgVariant == glsl_f32::VARIANT_ASG_WARP_K16);
 static_assert(int(LightType::kSg) == glsl_f32::LIGHT_SG && int(LightType::kSphere) == glsl_f32::LIGHT_SPHERE);
 static_assert(kSceneSpheres == glsl_f32::SCENE_SPHERES && kSceneCapsules == glsl_f32::SCENE_CAPSULES &&
-              kScenePlanes == glsl_f32::SCENE_PLANES && kSceneBumps == glsl_f32::SCENE_BUMPS);
+              kScenePlanes == glsl_f32::SCENE_PLANES && kSceneBumps == glsl_f32::SCENE_BUMPS &&
+              kSceneNormalMaps == glsl_f32::SCENE_NORMAL_MAPS);
 
 namespace {
 
@@ -348,6 +349,49 @@ PixelTraceCheck TracePixelBothWays(std::span<const glm::vec4> scene_words, int s
   return out;
 }
 
+SurfaceUvFrame SurfaceUvFrameAt(std::span<const glm::vec4> scene_words, int prim, glm::dvec3 p) {
+  using namespace glsl_f64;
+  g_scene_words = scene_words;
+  const Prim pr = loadPrim(prim);
+  const GeometricFrame f = geometricFrame(pr, p);
+  const UvGradient g = surfaceUvGradient(pr, p);
+  SurfaceUvFrame o{surfaceUv(pr, p), f.t, f.b, f.n, g.du, g.dv, surfaceUPeriod(pr)};
+  g_scene_words = {};
+  return o;
+}
+
+namespace {
+glsl_f64::NormalMapStats StatsOf(const NormalMapRead& r) {
+  glsl_f64::NormalMapStats s;
+  s.meanN = glm::dvec3(r.mean_normal_ft);
+  s.ft = r.mean_normal_ft.w;
+  s.b = r.b;
+  s.m = r.m;
+  return s;
+}
+}  // namespace
+
+NormalMapRead ReadNormalMap(std::span<const glm::vec4> scene_words, int prim, int nmf, glm::dvec2 uv,
+                            glm::dvec2 duv_dx, glm::dvec2 duv_dy) {
+  using namespace glsl_f64;
+  g_scene_words = scene_words;
+  NormalMapFilter nf;
+  nf.mode = nmf;
+  nf.duvdx = duv_dx;
+  nf.duvdy = duv_dy;
+  const NormalMapStats s = normalMapStats(loadPrim(prim).map, nf, uv);
+  g_scene_words = {};
+  return {glm::dvec4(s.meanN, s.ft), s.b, s.m};
+}
+
+glm::dvec3 NormalMapFilterNormal(int nmf, const NormalMapRead& read) {
+  return glsl_f64::normalMapNormal(nmf, StatsOf(read));
+}
+
+glm::dvec2 NormalMapFilterAlpha(int nmf, const NormalMapRead& read, glm::dvec2 alpha) {
+  return glsl_f64::normalMapAlpha(nmf, StatsOf(read), alpha);
+}
+
 PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc& camera, const LightDesc& light,
                        const MaterialDesc& material, int variant, DerivativeSource derivatives,
                        const Params<double>& params, glm::ivec2 px) {
@@ -406,8 +450,19 @@ bool CatalogueMatchesGlsl() {
       {"asg-warp", VARIANT_ASG_WARP},
       {"sg-warp-k16", VARIANT_SG_WARP_K16},
       {"asg-warp-k16", VARIANT_ASG_WARP_K16},
+      {"nm-point", NMF_POINT * NMF_STRIDE},
+      {"nm-mip", NMF_MIP * NMF_STRIDE},
+      {"toksvig", NMF_TOKSVIG * NMF_STRIDE},
+      {"toksvig-bp", NMF_TOKSVIG_BP * NMF_STRIDE},
+      {"toksvig-map", NMF_TOKSVIG_MAP * NMF_STRIDE},
+      {"lean", NMF_LEAN * NMF_STRIDE},
+      {"clean", NMF_CLEAN * NMF_STRIDE},
+      {"vmf", NMF_VMF * NMF_STRIDE},
+      {"unity-hdrp-nm", NMF_HDRP * NMF_STRIDE},
   };
-  if (Variants().size() != std::size(expected) || std::size(expected) != size_t(VARIANT_COUNT)) return false;
+  if (NMF_STRIDE != kNormalMapFilterStride || VARIANT_COUNT > NMF_STRIDE) return false;
+  if (Variants().size() != std::size(expected) || std::size(expected) != size_t(VARIANT_COUNT + NMF_COUNT - 1))
+    return false;
   for (const auto& [name, id] : expected) {
     const VariantInfo* info = FindVariant(name);
     if (!info || info->id != id) return false;

@@ -1,6 +1,8 @@
 // The variant catalogue: names, parameters with defaults, and sources, as
 // listed by `shimmer variants` and accepted by specs and `shimmer ndf`.
 #include <cmath>
+#include <deque>
+#include <mutex>
 #include <string>
 
 #include "shimmer/renderer/shading.h"
@@ -151,7 +153,103 @@ std::vector<VariantInfo> BuildCatalogue() {
        {kFpMax1},
        true,
        true},
+      // Normal-map filters (normal_map.glsl; scenes with a normal map only).
+      // Each combines with a geometric filter as GEOMETRIC+NAME.
+      {"nm-point",
+       1 * kNormalMapFilterStride,
+       "normal map at level 0, nearest texel: no mip maps, no filtering (the aliasing baseline)",
+       "baseline (seed 003)",
+       {},
+       false,
+       false},
+      {"nm-mip",
+       2 * kNormalMapFilterStride,
+       "the mipped (trilinear, anisotropic) mean normal renormalised, roughness kept: bumps average away and the "
+       "surface turns glossy in the distance",
+       "baseline (seed 003)",
+       {},
+       false,
+       false},
+      {"toksvig",
+       3 * kNormalMapFilterStride,
+       "mipped normal, alpha^2 += 2 sigma^2 with sigma^2 = (1 - |Na|) / |Na| from the mean normal's length (the "
+       "alpha form)",
+       "Toksvig 2004 via seed 003 (Hill, Specular showdown)",
+       {},
+       true,
+       false},
+      {"toksvig-bp",
+       4 * kNormalMapFilterStride,
+       "seed 003's Blinn-Phong form: power f_t s, f_t = |Na| / (|Na| + s (1 - |Na|)), s = 2 / alpha^2 - 2",
+       "seed 003",
+       {},
+       true,
+       false},
+      {"toksvig-map",
+       5 * kNormalMapFilterStride,
+       "Toksvig factor baked per mip level from a Gaussian-filtered level at power 100, converted with "
+       "ft /= lerp(s / 100, 1, ft)",
+       "seed 003 (Toksvig map)",
+       {},
+       true,
+       false},
+      {"lean",
+       6 * kNormalMapFilterStride,
+       "normal of the mean slope B, alpha^2 += 2 diag(M - B B^T) per tangent axis (anisotropic)",
+       "Olano and Baker, LEAN Mapping, I3D 2010 (seed 003)",
+       {},
+       true,
+       false},
+      {"clean",
+       7 * kNormalMapFilterStride,
+       "normal of B, one variance (E|t|^2 - |B|^2) / 2 per axis: LEAN without anisotropy",
+       "Baker, CLEAN mapping, GDC 2011 (seed 003)",
+       {},
+       true,
+       false},
+      {"vmf",
+       8 * kNormalMapFilterStride,
+       "von Mises-Fisher fit of the mean normal, kappa = (3r - r^3) / (1 - r^2), alpha^2 += 2 / kappa",
+       "Han et al., Frequency Domain Normal Map Filtering, SIGGRAPH 2007",
+       {},
+       true,
+       false},
+      {"unity-hdrp-nm",
+       9 * kNormalMapFilterStride,
+       "HDRP texture normal filtering: variance 0.25 / kappa capped at 0.03125, alpha^2 += 2 variance (4x less "
+       "widening than vmf)",
+       "Unity HDRP (TextureNormalVariance)",
+       {},
+       true,
+       false},
   };
+}
+
+// Combinations GEOMETRIC+NORMALMAP, made when first asked for.
+const VariantInfo* FindCombination(std::string_view name) {
+  const std::size_t plus = name.find('+');
+  if (plus == std::string_view::npos) return nullptr;
+  static std::mutex mutex;
+  static std::deque<std::pair<std::string, VariantInfo>> made;  // names and summaries own their text
+  static std::deque<std::string> texts;
+  std::lock_guard<std::mutex> lock(mutex);
+  for (const auto& [n, info] : made)
+    if (n == name) return &info;
+  const VariantInfo* geo = nullptr;
+  const VariantInfo* nm = nullptr;
+  for (const VariantInfo& v : Variants()) {
+    if (v.name == name.substr(0, plus)) geo = &v;
+    if (v.name == name.substr(plus + 1)) nm = &v;
+  }
+  if (!geo || !nm || FiltersNormalMap(*geo) || !FiltersNormalMap(*nm) || NeedsSgLight(*geo)) return nullptr;
+  auto& [own_name, info] = made.emplace_back(std::string(name), *geo);
+  info.name = own_name;
+  info.id = geo->id + nm->id;
+  info.summary = texts.emplace_back(std::string(nm->name) + " on the normal map, then " + std::string(geo->name) +
+                                    " on the roughness it gives: " + std::string(geo->summary));
+  info.source = texts.emplace_back(std::string(geo->source) + "; " + std::string(nm->source));
+  info.widens_roughness = geo->widens_roughness || nm->widens_roughness;
+  return &info;
 }
 
 }  // namespace
@@ -164,7 +262,7 @@ std::span<const VariantInfo> Variants() {
 const VariantInfo* FindVariant(std::string_view name) {
   for (const VariantInfo& v : Variants())
     if (v.name == name) return &v;
-  return nullptr;
+  return FindCombination(name);
 }
 
 std::optional<Ndf> ParseNdf(std::string_view name) {
@@ -181,10 +279,13 @@ std::string_view LightTypeName(LightType type) {
   return "directional";
 }
 
-bool NeedsSgLight(const VariantInfo& info) { return info.id >= kFirstSgVariant && info.id <= kLastSgVariant; }
+bool NeedsSgLight(const VariantInfo& info) {
+  const int g = GeometricVariantId(info.id);
+  return g >= kFirstSgVariant && g <= kLastSgVariant;
+}
 
 bool ReadsFootprint(const VariantInfo& info) {
-  return info.name != "none" && info.name != "sg-warp" && info.name != "asg-warp";
+  return info.name != "none" && info.name != "sg-warp" && info.name != "asg-warp" && info.name != "nm-point";
 }
 
 }  // namespace shimmer::shading

@@ -24,7 +24,19 @@ const int VARIANT_SG_WARP_K16 = 16;
 const int VARIANT_ASG_WARP_K16 = 17;
 const int VARIANT_COUNT = 18;
 
-bool isSgVariant(int variant) { return variant >= VARIANT_SG_WARP && variant <= VARIANT_ASG_WARP_K16; }
+// A variant id is a geometric filter above plus NMF_STRIDE times a
+// normal-map filter (NMF_* of normal_map.glsl; 0 for the variants above):
+// `toksvig` is NMF_TOKSVIG * NMF_STRIDE, `tk19+toksvig` adds VARIANT_TK19.
+// The normal-map filter picks the shading normal and widens the material's
+// roughness (pixel.glsl); the geometric filter then filters that material.
+const int NMF_STRIDE = 32;
+int geometricVariant(int variant) { return variant - (variant / NMF_STRIDE) * NMF_STRIDE; }
+int normalMapFilterOf(int variant) { return variant / NMF_STRIDE; }
+
+bool isSgVariant(int variant) {
+  int g = geometricVariant(variant);
+  return g >= VARIANT_SG_WARP && g <= VARIANT_ASG_WARP_K16;
+}
 
 // What a pixel knows about its neighbourhood. Derivatives are per pixel along
 // screen x and y, from 2x2 quad differences or from ray differentials.
@@ -201,6 +213,7 @@ real sgFootprintVariance(ShadingFootprint f, real fpMax) {
 const real FOOTPRINT_MAX = real(1e4);
 
 FilteredNdf evalVariant(int variant, int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {
+  variant = geometricVariant(variant);
   alpha = clampAlpha(alpha);
   vec2 lim = vec2(FOOTPRINT_MAX, FOOTPRINT_MAX);
   f.dhpp_dx = clamp(f.dhpp_dx, -lim, lim);

@@ -69,9 +69,12 @@ glm::dvec3 RayDirection(const shading::CameraDesc& c, double px, double py) {
 // Surface points farther than `far` get 3e-2: there a float hit position is
 // off by ~1e-7 * distance, which moves the phase of the bumpy plane's normal
 // pattern (several periods per pixel near the horizon) enough to change a
-// sharp lobe by about 1%.
+// sharp lobe by about 1%. `near_rel` replaces 2e-3 where a normal map is
+// minified several texels per pixel: the footprint is then a difference of
+// texture reads a few texels apart, which float texel coordinates move by
+// about 1%.
 void ExpectMatchesOracle(const std::string& scene_name, const std::string& variant, shading::DerivativeSource d,
-                         double far = 1e30, const std::string& material = "") {
+                         double far = 1e30, const std::string& material = "", double near_rel = 2e-3) {
   SCOPED_TRACE(scene_name + " / " + variant + " / derivatives " + std::to_string(int(d)) + " / " + material);
   RenderSettings s = Settings(scene_name, variant, d, 40);
   if (!material.empty()) {
@@ -92,7 +95,7 @@ void ExpectMatchesOracle(const std::string& scene_name, const std::string& varia
   for (int y = 0; y < s.height; ++y)
     for (int x = 0; x < s.width; ++x) {
       auto o = shading::ShadePixel(r->scene_words(), cam, s.scene.light, s.material, info->id, d, params, {x, y});
-      const double rel = o.depth > far ? 3e-2 : 2e-3;
+      const double rel = o.depth > far ? 3e-2 : near_rel;
       auto close = [rel](double g, double c) { return std::abs(g - c) <= rel * std::abs(c) + 1e-4; };
       glm::dvec3 gs{f.at(kSpecularR, x, y), f.at(kSpecularR + 1, x, y), f.at(kSpecularR + 2, x, y)};
       glm::dvec3 gd{f.at(kDiffuseR, x, y), f.at(kDiffuseR + 1, x, y), f.at(kDiffuseR + 2, x, y)};
@@ -141,6 +144,28 @@ TEST(GpuOracle, BumpyPlane) {
   for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
     for (const char* v : {"none", "godot", "unity-hdrp", "k16-ggx-rect-stable", "k16-ggx-rect-jacobian"})
       ExpectMatchesOracle("bumpy-plane", v, d, 20.0);
+}
+
+// Normal maps (seed 003): every normal-map filter and two combinations with
+// geometric filters, the texture footprint from the quad and from ray
+// differentials, minified (nm-plane, nm-sphere) and magnified (nm-magnify).
+TEST(GpuOracle, NormalMappedScenes) {
+  for (const char* v : {"none", "nm-point", "nm-mip", "toksvig", "toksvig-bp", "toksvig-map", "lean", "clean", "vmf",
+                        "unity-hdrp-nm", "tk19+toksvig", "k16-ggx-rect-stable+lean"})
+    ExpectMatchesOracle("nm-plane", v, DerivativeSource::kQuadFine, 20.0);
+  // (none on nm-sphere: the point-sampled bumps alias, a few cycles per
+  // pixel, and the quad's differences of them are chaotic in float.)
+  for (auto d : {DerivativeSource::kQuadCoarse, DerivativeSource::kAnalytic})
+    for (const char* v : {"toksvig", "lean", "tk19+vmf"}) ExpectMatchesOracle("nm-sphere", v, d, 1e30, "", 2e-2);
+  for (const char* v : {"toksvig", "toksvig-map", "clean"})
+    ExpectMatchesOracle("nm-magnify", v, DerivativeSource::kAnalytic);
+}
+
+TEST(GpuRender, NormalMapFiltersNeedANormalMap) {
+  RenderSettings s = Settings("sphere", "toksvig", DerivativeSource::kQuadFine, 16);
+  auto r = Renderer::Create(s);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("filters normal maps"), std::string::npos) << r.error();
 }
 
 // Spherical-Gaussian lights (seed 004): the closed-form warps, the exact BRDF

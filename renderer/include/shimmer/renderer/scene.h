@@ -4,6 +4,7 @@
 
 #include <glm/glm.hpp>
 
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -13,6 +14,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "shimmer/core/result.h"
+#include "shimmer/renderer/normal_map.h"
 #include "shimmer/renderer/shading.h"
 
 namespace shimmer::scene {
@@ -25,6 +27,11 @@ struct Primitive {
   double radius = 1;  // sphere, capsule; plane: height y
   double bump_slope = 0;
   double bump_frequency = 0;
+  // A tangent-space normal map over the primitive's uv (scene.glsl), repeated
+  // `normal_map_scale` times per uv unit; null: none.
+  std::shared_ptr<const NormalMap> normal_map;
+  NormalMapSource normal_map_source;
+  glm::dvec2 normal_map_scale{1, 1};
 };
 
 // Where the camera paths start: looking at `target` from `distance`, at

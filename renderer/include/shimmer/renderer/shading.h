@@ -137,7 +137,34 @@ inline constexpr int kSceneSpheres = 1;
 inline constexpr int kSceneCapsules = 2;
 inline constexpr int kScenePlanes = 4;
 inline constexpr int kSceneBumps = 8;  // planes with a normal pattern
-inline constexpr int kAllSceneFeatures = kSceneSpheres | kSceneCapsules | kScenePlanes | kSceneBumps;
+inline constexpr int kSceneNormalMaps = 16;
+inline constexpr int kAllSceneFeatures = kSceneSpheres | kSceneCapsules | kScenePlanes | kSceneBumps | kSceneNormalMaps;
+// --- Normal maps (normal_map.glsl, scene.glsl), in double ---------------------
+
+// Primitive `prim`'s uv at point p, its geometric tangent frame (t, b, n)
+// and the gradients of u and v along the surface.
+struct SurfaceUvFrame {
+  glm::dvec2 uv{0};
+  glm::dvec3 t{0}, b{0}, n{0};
+  glm::dvec3 du{0}, dv{0};
+  double u_period = 0;
+};
+SurfaceUvFrame SurfaceUvFrameAt(std::span<const glm::vec4> scene_words, int prim, glm::dvec3 p);
+
+// What normal-map filter `nmf` (NMF_* of normal_map.glsl) reads from the map
+// of primitive `prim` at uv with the uv footprint (duv_dx, duv_dy):
+// E[n] (xyz) and f_t (w), B, and M = (E[tx^2], E[ty^2], E[tx ty]).
+struct NormalMapRead {
+  glm::dvec4 mean_normal_ft{0};
+  glm::dvec2 b{0};
+  glm::dvec3 m{0};
+};
+NormalMapRead ReadNormalMap(std::span<const glm::vec4> scene_words, int prim, int nmf, glm::dvec2 uv,
+                            glm::dvec2 duv_dx, glm::dvec2 duv_dy);
+// The tangent-space normal and the widened roughness filter `nmf` makes of `read`.
+glm::dvec3 NormalMapFilterNormal(int nmf, const NormalMapRead& read);
+glm::dvec2 NormalMapFilterAlpha(int nmf, const NormalMapRead& read, glm::dvec2 alpha);
+
 PixelTraceCheck TracePixelBothWays(std::span<const glm::vec4> scene_words, int scene_features, const CameraDesc& camera,
                                    glm::ivec2 px, glm::dvec2 offset);
 
@@ -160,7 +187,17 @@ struct VariantInfo {
 };
 
 std::span<const VariantInfo> Variants();
+// A catalogue entry, or a combination GEOMETRIC+NORMALMAP of a geometric
+// filter and a normal-map filter ("tk19+toksvig"), made on first use and
+// kept for the process (the pointer stays valid).
 const VariantInfo* FindVariant(std::string_view name);
+// Variant ids: a geometric filter (VARIANT_* < kNormalMapFilterStride) plus
+// kNormalMapFilterStride times a normal-map filter (NMF_* of normal_map.glsl).
+inline constexpr int kNormalMapFilterStride = 32;
+inline int GeometricVariantId(int id) { return id % kNormalMapFilterStride; }
+inline int NormalMapFilterId(int id) { return id / kNormalMapFilterStride; }
+// Whether the variant filters a normal map (and so needs a scene that has one).
+inline bool FiltersNormalMap(const VariantInfo& info) { return NormalMapFilterId(info.id) != 0; }
 // Seed 004's SG and ASG warps (VARIANT_SG_WARP .. VARIANT_ASG_WARP_K16)
 // shade SG lights only; every other variant shades any light.
 inline constexpr int kFirstSgVariant = 14, kLastSgVariant = 17;

@@ -329,6 +329,9 @@ Result<nlohmann::json> BlenderShotData(const BlenderShot& shot) {
                  planes = nlohmann::json::array();
   int index = 0;
   for (const scene::Primitive& p : shot.scene.primitives) {
+    if (p.normal_map)
+      return R::Failure("scene " + shot.scene.name + ": primitive " + std::to_string(index) + " has a normal map (" +
+                        p.normal_map->name + "); normal maps are not exported to Blender");
     switch (p.type) {
       case scene::Primitive::Type::kSphere: spheres.push_back({p.a.x, p.a.y, p.a.z, p.radius}); break;
       case scene::Primitive::Type::kCapsule:

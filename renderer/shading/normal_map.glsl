@@ -15,6 +15,12 @@
 // hpp), B = E[t] and M = E[t t^T] LEAN's moments (Olano and Baker 2010, as
 // cited in seed 003). Sides are powers of two, so wrapping is a bit mask.
 
+// The includer provides `vec4 sceneWord(int i)` and defines SHIMMER_SCENE_WORDS;
+// without it (stand-alone compile checks) the scene is empty.
+#ifndef SHIMMER_SCENE_WORDS
+vec4 sceneWord(int i) { return vec4(real(0), real(0), real(0), real(0)); }
+#endif
+
 // Normal-map filters: the part of a variant id above NMF_STRIDE (variants.glsl).
 const int NMF_NONE = 0;        // level 0, bilinear: the surface the reference sees, at the pixel centre
 const int NMF_POINT = 1;       // nm-point: level 0, nearest texel (no mip maps, no filtering)

@@ -14,11 +14,8 @@
 //                                map: the word of the primitive's normal-map header (normal_map.glsl), 0: none
 // Unbounded primitives (planes) follow the BVH's primitives and are always tested.
 // Normal-map headers and texels follow the primitives.
-// The includer provides `vec4 sceneWord(int i)` and defines SHIMMER_SCENE_WORDS;
-// without it (stand-alone compile checks) the scene is empty.
-#ifndef SHIMMER_SCENE_WORDS
-vec4 sceneWord(int i) { return vec4(real(0), real(0), real(0), real(0)); }
-#endif
+// The includer provides `vec4 sceneWord(int i)` (normal_map.glsl, included
+// first, declares the empty scene of stand-alone compile checks).
 
 const int PRIM_SPHERE = 0;
 const int PRIM_CAPSULE = 1;

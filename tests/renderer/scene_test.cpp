@@ -101,7 +101,7 @@ TEST(SceneJson, EveryErrorNamesTheFileAndTheJsonPointerOfTheKey) {
       {R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radius": "big"}]})",
        "/primitives/0/radius: must be a number"},
       {R"({"primitives": [{"type": "sphere", "center": [0,0,0], "radus": 1}]})",
-       "/primitives/0/radus: unknown key (expected: type, center, radius)"},
+       "/primitives/0/radus: unknown key (expected: type, center, radius, normal_map)"},
       {R"({"primitives": [SPHERE, SPHERE, {"type": "capsule", "a": [0,0,0], "b": [0,0,0]}]})",
        "/primitives/2/b: coincides with 'a'"},
       {R"({"primitives": [{"type": "capsule", "a": [0,0,0]}]})", "/primitives/0/b: is required"},

@@ -77,7 +77,7 @@ shading::Footprint<T> FootprintOf(const NdfOptions& o) {
 template <class T>
 shading::FilteredNdf<double> Evaluate(const shading::VariantInfo& info, shading::Ndf ndf, const NdfOptions& o,
                                       const shading::Params<double>& p) {
-  shading::Params<T> pt{T(p.fp_max), T(p.fp_min_cap), T(p.sigma2), T(p.kappa)};
+  shading::Params<T> pt{T(p.fp_max), T(p.fp_min_cap), T(p.sigma2), T(p.kappa), T(p.nm_scale)};
   glm::vec<2, T> alpha{T(o.alpha[0]), T(o.alpha.size() > 1 ? o.alpha[1] : o.alpha[0])};
   const auto r = shading::EvaluateVariant<T>(info.id, ndf, alpha, FootprintOf<T>(o), pt);
   return {double(r.slope_density), double(r.density), {double(r.alpha_eff.x), double(r.alpha_eff.y)}};

@@ -133,7 +133,7 @@ void AddRenderCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("render", "Render a camera-motion sequence to EXR frames (Vulkan compute)");
   cmd->footer(
       "Material spec: NDF:ALPHA[,ALPHA_Y][,f0=V|R/G/B][,albedo=V|R/G/B]\n"
-      "  e.g. ggx:0.05   beckmann:0.02,0.1   ggx:0.1,f0=0.9/0.6/0.3,albedo=0\n"
+      "  e.g. ggx:0.05   beckmann:0.02,0.1   ggx:0.1,f0=0.9/0.6/0.3,albedo=0   blinn-phong:200 (a power)\n"
       "Scenes: sphere, sphere-field, wires, bumpy-plane, sg-sphere-field, sg-plane, sg-bumpy-plane,\n"
       "  nm-plane, nm-sphere, nm-magnify (normal-mapped), or a JSON file (docs/scenes.md).\n"
       "Camera paths: orbit, pan, dolly, vr-jitter, static.\n"

@@ -182,7 +182,7 @@ FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::funct
         fit.variant = variant;
         fit.param = config.param;
         fit.material = material;
-        fit.ndf = desc.ndf == shading::Ndf::kGgx ? "ggx" : "beckmann";
+        fit.ndf = std::string(shading::NdfName(desc.ndf));
         fit.alpha = std::sqrt(desc.alpha.x * desc.alpha.y);
         fit.lo = config.lo;
         fit.hi = config.hi;

@@ -231,6 +231,27 @@ bool SgLitScene(const std::string& scene) {
   return loaded && loaded->light.type == shading::LightType::kSg;
 }
 
+bool NormalMappedScene(const std::string& scene) {
+  const auto loaded = scene::LoadScene(scene);
+  return loaded && scene::SceneFeatures(*loaded) & shading::kSceneNormalMaps;
+}
+
+// Formats as engines ship them: block-compressed where the data survives it
+// (BC5 two-channel normals, BC4 one-channel gloss), uncompressed 8-bit where
+// the vector's length is the signal (seed 003: compression "will still mess
+// with vector length"), 16-bit floats where the moments need the precision
+// (seed 003 on LEAN: "8-bit textures only make sense if absolutely needed").
+TexelStorage NormalMapStorage(const std::string& variant) {
+  const std::size_t plus = variant.find('+');
+  const std::string nm = plus == std::string::npos ? variant : variant.substr(plus + 1);
+  if (nm == "toksvig" || nm == "toksvig-bp" || nm == "vmf" || nm == "unity-hdrp-nm")
+    return {"unnormalised normal, RGBA8", 4};
+  if (nm == "toksvig-map") return {"normal BC5 + Toksvig factor BC4", 1.5};
+  if (nm == "lean") return {"B and M: two RGBA16F textures", 16};
+  if (nm == "clean") return {"B and M_z: one RGBA16F texture", 8};
+  return {"normal BC5", 1};
+}
+
 }  // namespace report
 
 std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<double>& error) {

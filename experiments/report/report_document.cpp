@@ -297,6 +297,29 @@ void SgAccuracySection(Document& doc, const SgAccuracyTable& sg) {
   doc.Figures({stem + ".svg"}, {"SG lighting: energy error against view angle per α, SG warp and ASG warp"});
 }
 
+// Seed 003's argument beside the measurements: what each normal-map filter
+// stores per texel, and its error over the normal-mapped shots.
+void NormalMapMemorySection(Document& doc, const std::vector<Group>& groups) {
+  std::vector<const Group*> mapped;
+  for (const Group& g : groups)
+    if (NormalMappedScene(g.scene)) mapped.push_back(&g);
+  if (mapped.empty()) return;
+  doc.Heading(2, kNormalMapMemoryHeading);
+  doc.Paragraph(
+      "Over the normal-mapped shots: each variant's median `tv_err` ratio to `none` (IQR), its energy bias, and "
+      "what an engine stores per texel for it (docs/normal-maps.md): block-compressed where compression keeps the "
+      "signal, 8-bit uncompressed where the mean normal's length is the signal, 16-bit floats for LEAN's moments "
+      "(seed 003). Geometric filters and supersampling read the plain normal map.");
+  std::vector<std::vector<std::string>> cells;
+  for (const VariantSummary& v : Summarise(mapped)) {
+    const TexelStorage s = NormalMapStorage(v.samples.front().row->job.variant);
+    cells.push_back({Code(v.label), std::to_string(v.ratio.n), Ratio(v.ratio), Fmt(v.energy_bias.median, "%+.3f"),
+                     s.format, Fmt(s.bytes, "%.3g")});
+  }
+  doc.Table({"variant", "tables", "tv_err ratio (IQR)", "energy bias", "stored per texel", "bytes per texel"},
+            cells);
+}
+
 // Rows whose variant came from a user's file, named once with where the
 // file was and what it held, so that a reader can tell them from the catalogue.
 void UserVariantsSection(Document& doc, const std::vector<Group>& groups) {
@@ -388,6 +411,7 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
                 "[report.html](report.html).");
   Overview(doc, groups);
   if (sg) SgAccuracySection(doc, *sg);
+  NormalMapMemorySection(doc, groups);
   UserVariantsSection(doc, groups);
   ExternalSequencesSection(doc, groups);
   doc.Heading(2, kShotsHeading);

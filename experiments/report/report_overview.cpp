@@ -109,6 +109,11 @@ std::vector<Recommendation> Recommend(const std::vector<const Group*>& groups) {
       classes[{200, "light"}].push_back(g);
       continue;
     }
+    // Likewise the normal-mapped shots and their normal-map filters.
+    if (NormalMappedScene(g->scene)) {
+      classes[{150, "normal maps"}].push_back(g);
+      continue;
+    }
     classes[{rank(kRoughness, RoughnessClass(g->alpha)), "roughness"}].push_back(g);
     classes[{100 + rank(kGeometry, GeometryClass(g->scene)), "geometry"}].push_back(g);
   }
@@ -116,9 +121,10 @@ std::vector<Recommendation> Recommend(const std::vector<const Group*>& groups) {
   for (auto& [key, members] : classes) {
     Recommendation rec;
     rec.dimension = key.second;
-    rec.name = rec.dimension == "roughness" ? RoughnessClass(members.front()->alpha)
-               : rec.dimension == "light"   ? "spherical Gaussian"
-                                            : GeometryClass(members.front()->scene);
+    rec.name = rec.dimension == "roughness"     ? RoughnessClass(members.front()->alpha)
+               : rec.dimension == "light"       ? "spherical Gaussian"
+               : rec.dimension == "normal maps" ? "normal-mapped"
+                                                : GeometryClass(members.front()->scene);
     rec.tables = int(members.size());
     std::set<std::string> shots;
     for (const Group* g : members) shots.insert(g->Shot());

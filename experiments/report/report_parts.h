@@ -43,6 +43,17 @@ std::string GeometryClass(const std::string& scene);
 // Whether the scene is lit by a spherical Gaussian (a scene file that has gone
 // since the run: no).
 bool SgLitScene(const std::string& scene);
+// Whether a primitive of the scene carries a normal map.
+bool NormalMappedScene(const std::string& scene);
+
+// What an engine stores per texel for a normal-map filter (seed 003's memory
+// argument), by the variant's normal-map part; empty format for variants
+// that read the plain normal map.
+struct TexelStorage {
+  std::string format;
+  double bytes = 0;
+};
+TexelStorage NormalMapStorage(const std::string& variant);
 
 // A metric's 95 % interval, metrics.ci95[key] = [lo, hi]; unknown when the
 // store predates intervals.

@@ -25,6 +25,7 @@ struct Push {
   float params[4];
   std::int32_t round[4];
   float target[4];
+  float params2[4];  // nm_scale, 0, 0, 0
 };
 
 // std140/std430 place vec4 members at multiples of 16 bytes with no padding
@@ -33,7 +34,8 @@ static_assert(sizeof(Camera) == 64);
 static_assert(offsetof(FrameConstants, prev) == 64 && offsetof(FrameConstants, light_a) == 128);
 static_assert(offsetof(FrameConstants, mat_albedo) == 192 && offsetof(FrameConstants, size) == 208);
 static_assert(sizeof(FrameConstants) == 224);
-static_assert(offsetof(Push, round) == 16 && offsetof(Push, target) == 32 && sizeof(Push) == 48);
+static_assert(offsetof(Push, round) == 16 && offsetof(Push, target) == 32 && offsetof(Push, params2) == 48 &&
+              sizeof(Push) == 64);
 // Push constants must fit the 128 bytes every Vulkan device guarantees.
 static_assert(sizeof(Push) <= 128);
 

@@ -589,13 +589,17 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
 
 Result<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading::MaterialDesc& base) {
   using R = Result<shading::MaterialDesc>;
-  const std::string usage = " (expected NDF:ALPHA[,ALPHA_Y][,f0=V|R/G/B][,albedo=V|R/G/B], e.g. ggx:0.05)";
+  const std::string usage =
+      " (expected NDF:ALPHA[,ALPHA_Y][,f0=V|R/G/B][,albedo=V|R/G/B], e.g. ggx:0.05, or blinn-phong:POWER[,POWER_Y])";
   shading::MaterialDesc m = base;
   auto colon = spec.find(':');
   if (colon == std::string_view::npos) return R::Failure("material '" + std::string(spec) + "'" + usage);
   auto ndf = shading::ParseNdf(spec.substr(0, colon));
-  if (!ndf) return R::Failure("material '" + std::string(spec) + "': NDF must be ggx or beckmann" + usage);
+  if (!ndf)
+    return R::Failure("material '" + std::string(spec) + "': NDF must be ggx, beckmann or blinn-phong" + usage);
   m.ndf = *ndf;
+  // Blinn-Phong is given by its power s (seed 003), alpha^2 = 2 / (s + 2).
+  const bool power = m.ndf == shading::Ndf::kBlinnPhong;
   std::vector<double> alphas;
   std::stringstream ss{std::string(spec.substr(colon + 1))};
   std::string item;
@@ -608,6 +612,12 @@ Result<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading
         a = std::stod(item, &used);
       } catch (const std::exception&) {
         used = 0;
+      }
+      if (power) {
+        if (used == 0 || used != item.size() || !std::isfinite(a) || a < 0 || a > 1e8)
+          return R::Failure("material '" + std::string(spec) + "': Blinn-Phong power '" + item +
+                            "' must be a number in [0, 1e8]");
+        a = shading::BlinnPhongAlpha(a);
       }
       if (used == 0 || used != item.size() || !std::isfinite(a) || a <= 0 || a > 1)
         return R::Failure("material '" + std::string(spec) + "': roughness '" + item + "' must be a number in (0, 1]");
@@ -648,8 +658,9 @@ std::string MaterialSpec(const shading::MaterialDesc& m) {
   };
   std::ostringstream o;
   o.precision(6);
-  o << shading::NdfName(m.ndf) << ":" << m.alpha.x;
-  if (m.alpha.y != m.alpha.x) o << "," << m.alpha.y;
+  auto value = [&m](double alpha) { return m.ndf == shading::Ndf::kBlinnPhong ? shading::BlinnPhongPower(alpha) : alpha; };
+  o << shading::NdfName(m.ndf) << ":" << value(m.alpha.x);
+  if (m.alpha.y != m.alpha.x) o << "," << value(m.alpha.y);
   o << ",f0=" << rgb(m.f0) << ",albedo=" << rgb(m.albedo);
   return o.str();
 }

@@ -36,6 +36,7 @@ void main() {
   p.fp_min_cap = probe.words[7].y;
   p.sigma2 = probe.words[7].z;
   p.kappa = probe.words[7].w;
+  p.nm_scale = real(1);  // the probe evaluates NDFs; normal maps need a scene
 #ifdef SHIMMER_USER_VARIANT
   FilteredNdf r = userVariant(ndf, alpha, f, userParams(p));
 #else

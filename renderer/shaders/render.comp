@@ -61,6 +61,7 @@ layout(push_constant) uniform Push {
   vec4 params;   // fp_max, fp_min_cap, sigma2, kappa
   ivec4 round;   // reference round, frame index, replicates K, seed (uint bits)
   vec4 target;   // relative standard error target (0: off), luminance floor
+  vec4 params2;  // nm_scale, 0, 0, 0
 } pc;
 
 vec4 sceneWord(int i) { return scene.words[i]; }
@@ -252,6 +253,7 @@ void main() {
   vp.fp_min_cap = pc.params.y;
   vp.sigma2 = pc.params.z;
   vp.kappa = pc.params.w;
+  vp.nm_scale = pc.params2.x;
 
   if (SPP_N == 1) {
     // Pixels past the image edge still run: they are the quad's helper lanes.
@@ -293,7 +295,7 @@ void main() {
       }
       f = quadFootprint(s, s0, s1, s0, s2);
     }
-    if (NM_FILTER != NMF_NONE) m.alpha = normalMapAlphaAt(s, nf, m.alpha);
+    if (NM_FILTER != NMF_NONE) m.alpha = normalMapAlphaAt(s, nf, m.alpha, vp.nm_scale);
     FilteredNdf ndf = runVariant(m.ndf, m.alpha, f, vp);
     PixelShade sh = shadeSample(s, f, ndf, m, light, VARIANT_ID, vp, QUADRATURE);
     if (!inside) return;

@@ -211,7 +211,7 @@ real alpha2OfPower(real power) { return real(2) / (max(power, real(0)) + real(2)
 // sigma^2) is the same statement on the Blinn-Phong power). Engines combine
 // a normal-map filter with a geometric one the same way: the geometric filter
 // widens the roughness this returns.
-vec2 normalMapAlpha(int mode, NormalMapStats s, vec2 alpha) {
+vec2 normalMapAlphaOf(int mode, NormalMapStats s, vec2 alpha) {
   vec2 a2 = alpha * alpha;
   vec2 one = vec2(real(1), real(1));
   if (mode == NMF_TOKSVIG) {
@@ -266,4 +266,13 @@ vec2 normalMapAlpha(int mode, NormalMapStats s, vec2 alpha) {
     return sqrt(min(a2 + vec2(add, add), max(a2, one)));
   }
   return alpha;  // NMF_NONE, NMF_POINT, NMF_MIP
+}
+
+// The same with the added alpha^2 scaled by `scale` (the nm_scale parameter,
+// which the fit tunes per material; 1 is each filter as published).
+vec2 normalMapAlpha(int mode, NormalMapStats s, vec2 alpha, real scale) {
+  vec2 a2 = alpha * alpha;
+  vec2 w = normalMapAlphaOf(mode, s, alpha);
+  vec2 one = vec2(real(1), real(1));
+  return sqrt(min(a2 + (w * w - a2) * scale, max(a2, one)));
 }

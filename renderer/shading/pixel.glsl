@@ -339,11 +339,11 @@ PixelShade shadeSample(SurfaceSample s, ShadingFootprint f, FilteredNdf ndf, Mat
 }
 
 // The material roughness a normal-map filter widens to at sample s.
-vec2 normalMapAlphaAt(SurfaceSample s, NormalMapFilter nf, vec2 alpha) {
+vec2 normalMapAlphaAt(SurfaceSample s, NormalMapFilter nf, vec2 alpha, real scale) {
   if (s.prim < 0) return alpha;
   Prim pr = loadPrim(s.prim);
   if (!isMapped(pr)) return alpha;
-  return normalMapAlpha(nf.mode, normalMapStats(pr.map, nf, s.uv), alpha);
+  return normalMapAlpha(nf.mode, normalMapStats(pr.map, nf, s.uv), alpha, scale);
 }
 
 vec2 pixelCentre(ivec2 px) { return vec2(real(px.x) + real(0.5), real(px.y) + real(0.5)); }
@@ -405,7 +405,7 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
     }
     r.f = quadFootprint(r.s, x0, x1, y0, y1);
   }
-  if (nmf != NMF_NONE) m.alpha = normalMapAlphaAt(r.s, nf, m.alpha);
+  if (nmf != NMF_NONE) m.alpha = normalMapAlphaAt(r.s, nf, m.alpha, vp.nm_scale);
   r.ndf = evalVariant(variant, m.ndf, m.alpha, r.f, vp);
   r.shade = shadeSample(r.s, r.f, r.ndf, m, light, variant, vp, vec4(real(-1), real(0), real(0), real(0)));
   return r;

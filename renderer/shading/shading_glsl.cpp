@@ -111,6 +111,7 @@ FilteredNdf<T> EvaluateVariant(int id, Ndf ndf, glm::vec<2, T> alpha, const Foot
   p.fp_min_cap = params.fp_min_cap;
   p.sigma2 = params.sigma2;
   p.kappa = params.kappa;
+  p.nm_scale = params.nm_scale;
   auto r = Glsl<T>::Eval(id, static_cast<int>(ndf), alpha, f, p);
   return {r.slope_density, r.density, r.alpha_eff};
 }
@@ -242,6 +243,7 @@ auto FlatSgPoint(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3,
   p.vp.fp_min_cap = T(0.1);
   p.vp.sigma2 = 0;
   p.vp.kappa = 0;
+  p.vp.nm_scale = 1;
   return p;
 }
 }  // namespace
@@ -388,8 +390,8 @@ glm::dvec3 NormalMapFilterNormal(int nmf, const NormalMapRead& read) {
   return glsl_f64::normalMapNormal(nmf, StatsOf(read));
 }
 
-glm::dvec2 NormalMapFilterAlpha(int nmf, const NormalMapRead& read, glm::dvec2 alpha) {
-  return glsl_f64::normalMapAlpha(nmf, StatsOf(read), alpha);
+glm::dvec2 NormalMapFilterAlpha(int nmf, const NormalMapRead& read, glm::dvec2 alpha, double scale) {
+  return glsl_f64::normalMapAlpha(nmf, StatsOf(read), alpha, scale);
 }
 
 PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc& camera, const LightDesc& light,
@@ -413,6 +415,7 @@ PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc&
   p.fp_min_cap = params.fp_min_cap;
   p.sigma2 = params.sigma2;
   p.kappa = params.kappa;
+  p.nm_scale = params.nm_scale;
   PixelResult r = renderPixelOracle(c, l, m, variant, static_cast<int>(derivatives), p, px);
   g_scene_words = {};
   PixelOracle o;

@@ -1,4 +1,4 @@
-// The four variant parameters (fp_max, fp_min_cap, sigma2, kappa): their one
+// The variant parameters (fp_max, fp_min_cap, sigma2, kappa, nm_scale): their one
 // table, validation, and the resolution of defaults and overrides.
 #include <cmath>
 #include <cstdio>
@@ -22,6 +22,8 @@ constexpr ParamField kParamFields[] = {
      "fp_min = min(alpha, fp_min_cap); alpha is clamped to 100 (ALPHA_MAX in common.glsl)"},
     {"sigma2", &Params<double>::sigma2, 0, 1e4, "screen-space variance of the filtering kernel"},
     {"kappa", &Params<double>::kappa, 0, 1e4, "clamp on the kernel roughness"},
+    {"nm_scale", &Params<double>::nm_scale, 0, 100,
+     "scale on the roughness variance a normal-map filter adds (widened alpha^2 is capped at 1)"},
 };
 
 }  // namespace

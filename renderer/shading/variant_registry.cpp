@@ -15,6 +15,7 @@ constexpr double kInvTwoPi = 0.15915494309189533577;
 
 const ParamInfo kFpMax1{"fp_max", 1.0,
                         "upper clamp on the slope-space footprint half-sides (seed 000: \"usually 1.0\")"};
+const ParamInfo kNmScale1{"nm_scale", 1.0, "scale on the roughness variance the normal-map filter adds (1: as published)"};
 
 std::vector<VariantInfo> BuildCatalogue() {
   return {
@@ -175,14 +176,14 @@ std::vector<VariantInfo> BuildCatalogue() {
        "mipped normal, alpha^2 += 2 sigma^2 with sigma^2 = (1 - |Na|) / |Na| from the mean normal's length (the "
        "alpha form)",
        "Toksvig 2004 via seed 003 (Hill, Specular showdown)",
-       {},
+       {kNmScale1},
        true,
        false},
       {"toksvig-bp",
        4 * kNormalMapFilterStride,
        "seed 003's Blinn-Phong form: power f_t s, f_t = |Na| / (|Na| + s (1 - |Na|)), s = 2 / alpha^2 - 2",
        "seed 003",
-       {},
+       {kNmScale1},
        true,
        false},
       {"toksvig-map",
@@ -190,28 +191,28 @@ std::vector<VariantInfo> BuildCatalogue() {
        "Toksvig factor baked per mip level from a Gaussian-filtered level at power 100, converted with "
        "ft /= lerp(s / 100, 1, ft)",
        "seed 003 (Toksvig map)",
-       {},
+       {kNmScale1},
        true,
        false},
       {"lean",
        6 * kNormalMapFilterStride,
        "normal of the mean slope B, alpha^2 += 2 diag(M - B B^T) per tangent axis (anisotropic)",
        "Olano and Baker, LEAN Mapping, I3D 2010 (seed 003)",
-       {},
+       {kNmScale1},
        true,
        false},
       {"clean",
        7 * kNormalMapFilterStride,
        "normal of B, one variance (E|t|^2 - |B|^2) / 2 per axis: LEAN without anisotropy",
        "Baker, CLEAN mapping, GDC 2011 (seed 003)",
-       {},
+       {kNmScale1},
        true,
        false},
       {"vmf",
        8 * kNormalMapFilterStride,
        "von Mises-Fisher fit of the mean normal, kappa = (3r - r^3) / (1 - r^2), alpha^2 += 2 / kappa",
        "Han et al., Frequency Domain Normal Map Filtering, SIGGRAPH 2007",
-       {},
+       {kNmScale1},
        true,
        false},
       {"unity-hdrp-nm",
@@ -219,7 +220,7 @@ std::vector<VariantInfo> BuildCatalogue() {
        "HDRP texture normal filtering: variance 0.25 / kappa capped at 0.03125, alpha^2 += 2 variance (4x less "
        "widening than vmf)",
        "Unity HDRP (TextureNormalVariance)",
-       {},
+       {kNmScale1},
        true,
        false},
   };
@@ -249,6 +250,7 @@ const VariantInfo* FindCombination(std::string_view name) {
                                     " on the roughness it gives: " + std::string(geo->summary));
   info.source = texts.emplace_back(std::string(geo->source) + "; " + std::string(nm->source));
   info.widens_roughness = geo->widens_roughness || nm->widens_roughness;
+  info.params.insert(info.params.end(), nm->params.begin(), nm->params.end());
   return &info;
 }
 
@@ -268,10 +270,14 @@ const VariantInfo* FindVariant(std::string_view name) {
 std::optional<Ndf> ParseNdf(std::string_view name) {
   if (name == "ggx") return Ndf::kGgx;
   if (name == "beckmann") return Ndf::kBeckmann;
+  if (name == "blinn-phong") return Ndf::kBlinnPhong;
   return std::nullopt;
 }
 
-std::string_view NdfName(Ndf ndf) { return ndf == Ndf::kGgx ? "ggx" : "beckmann"; }
+std::string_view NdfName(Ndf ndf) {
+  if (ndf == Ndf::kBlinnPhong) return "blinn-phong";
+  return ndf == Ndf::kGgx ? "ggx" : "beckmann";
+}
 
 std::string_view LightTypeName(LightType type) {
   if (type == LightType::kSphere) return "sphere";

@@ -57,6 +57,7 @@ struct VariantParams {
   real fp_min_cap;  // k16-ggx-rect: fp_min = min(alpha, fp_min_cap)
   real sigma2;      // screen-space variance of the filtering kernel
   real kappa;       // clamp on the kernel roughness
+  real nm_scale;    // normal-map filters: scale on the variance they add (pixel.glsl)
 };
 
 struct FilteredNdf {

@@ -230,6 +230,46 @@ TEST(ReportOverview, SgLitShotsAreTheirOwnClass) {
   EXPECT_EQ(rough->pick->label, "unity-hdrp");
 }
 
+// Normal-mapped shots run the normal-map filters: their own class, and a
+// section with each filter's stored bytes per texel beside its error.
+TEST(ReportOverview, NormalMappedShotsAreTheirOwnClassWithTheirMemory) {
+  std::vector<JobResult> rows;
+  for (const char* camera : {"orbit", "dolly"}) {
+    auto add = [&](const char* scene, const char* v, double err) {
+      rows.push_back(Row(scene, "ggx:0.05", v, err, 0.0));
+      rows.back().job.camera = camera;
+    };
+    add("sphere", "none", 1.0);
+    add("sphere", "tk19", 0.5);
+    add("nm-plane", "none", 1.0);
+    add("nm-plane", "lean", 0.2);
+    add("nm-plane", "toksvig-map", 0.3);
+    add("nm-plane", "tk19+clean", 0.25);
+  }
+  const std::vector<Group> groups = GroupRows(rows);
+  std::map<std::string, const Recommendation*> by_name;
+  const auto recs = Recommend(Pointers(groups));
+  for (const Recommendation& r : recs) by_name[r.dimension + ": " + r.name] = &r;
+  ASSERT_EQ(by_name.count("normal maps: normal-mapped"), 1u);
+  const Recommendation* nm = by_name.at("normal maps: normal-mapped");
+  EXPECT_EQ(nm->tables, 2);
+  ASSERT_NE(nm->pick, nullptr);
+  EXPECT_EQ(nm->pick->label, "lean");
+  EXPECT_EQ(by_name.at("roughness: 0.02 < α ≤ 0.1")->tables, 2);  // sphere only
+  const std::string md = ToMarkdown(BuildDocument(groups, "t", rows.size()));
+  const std::size_t at = md.find(kNormalMapMemoryHeading);
+  ASSERT_NE(at, std::string::npos) << md;
+  const std::string section = md.substr(at, md.find("\n## ", at + 1) - at);
+  EXPECT_NE(section.find("| `lean` | 2 | 0.2 (IQR 0.2–0.2) | +0.000 | B and M: two RGBA16F textures | 16 |"),
+            std::string::npos)
+      << section;
+  EXPECT_NE(section.find("| `toksvig-map` | 2 | 0.3"), std::string::npos) << section;
+  EXPECT_NE(section.find("| `tk19+clean` | 2 | 0.25 (IQR 0.25–0.25) | +0.000 | B and M_z: one RGBA16F texture | 8 |"),
+            std::string::npos)
+      << section;
+  EXPECT_EQ(section.find("`tk19` |"), std::string::npos);  // not a normal-mapped shot's row
+}
+
 // Intervals decide the verdict: overlapping → indistinguishable, separate → better.
 TEST(ReportOverview, PickAgainstRunnerUpByIntervals) {
   auto rows_with = [](double half) {

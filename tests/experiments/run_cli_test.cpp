@@ -194,6 +194,40 @@ TEST(RunCli, ShotsAreCheckedAndVariantsBenchmarkedOnce) {
   EXPECT_EQ(rerun.find("benchmark"), std::string::npos) << rerun;
 }
 
+// Seed 003's physics: on nm-plane under dolly (minified bumps, the footprint
+// changing), Toksvig, LEAN and CLEAN steady the highlight far below the
+// point-sampled map and keep its energy closer to the reference than the
+// mipped normal alone, which averages the bumps away.
+TEST(NormalMapCli, OnNmPlaneUnderDollyTheFiltersSteadyTheBumpsAndKeepTheirEnergy) {
+  Workspace ws;
+  std::ofstream(ws.dir / "nm.json") << R"({
+    "name": "nm",
+    "scenes": ["nm-plane"],
+    "materials": ["ggx:0.05"],
+    "cameras": ["dolly"],
+    "variants": ["nm-point", "nm-mip", "toksvig", "lean", "clean"],
+    "size": [48, 48],
+    "frames": 12,
+    "reference": {"spp": 6},
+    "metrics": {"highlight_mask": false}
+  })";
+  const std::string cmd = "cd " + ws.dir.string() + " && exec " + SHIMMER_EXE +
+                          " run nm.json --db nm.db --work nm --no-benchmark --no-check >>log.txt 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << ReadText(ws.dir / "log.txt");
+  auto store = ResultStore::Open((ws.dir / "nm.db").string(), ResultStore::Mode::kReadOnly);
+  ASSERT_TRUE(store) << store.error();
+  auto rows = (*store)->All();
+  ASSERT_TRUE(rows) << rows.error();
+  std::map<std::string, nlohmann::json> m;
+  for (const JobResult& r : *rows) m[r.job.variant] = r.metrics;
+  ASSERT_EQ(m.size(), 5u);
+  const double point_tv = m["nm-point"]["tv_err"], mip_bias = std::abs(double(m["nm-mip"]["energy_bias"]));
+  for (const char* v : {"toksvig", "lean", "clean"}) {
+    EXPECT_LT(double(m[v]["tv_err"]), 0.5 * point_tv) << v;
+    EXPECT_LT(std::abs(double(m[v]["energy_bias"])), mip_bias) << v;
+  }
+}
+
 // A shot whose reference moves beyond reference.converge is marked, and the run says so.
 TEST(RunCli, AShotOutsideTheConvergenceToleranceIsMarkedUnconverged) {
   Workspace ws;

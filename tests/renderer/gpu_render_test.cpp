@@ -150,9 +150,10 @@ TEST(GpuOracle, BumpyPlane) {
 // geometric filters, the texture footprint from the quad and from ray
 // differentials, minified (nm-plane, nm-sphere) and magnified (nm-magnify).
 TEST(GpuOracle, NormalMappedScenes) {
-  for (const char* v : {"none", "nm-point", "nm-mip", "toksvig", "toksvig-bp", "toksvig-map", "lean", "clean", "vmf",
-                        "unity-hdrp-nm", "tk19+toksvig", "k16-ggx-rect-stable+lean"})
-    ExpectMatchesOracle("nm-plane", v, DerivativeSource::kQuadFine, 20.0);
+  for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
+    for (const char* v : {"none", "nm-point", "nm-mip", "toksvig", "toksvig-bp", "toksvig-map", "lean", "clean", "vmf",
+                          "unity-hdrp-nm", "tk19+toksvig", "k16-ggx-rect-stable+lean"})
+      ExpectMatchesOracle("nm-plane", v, d, 20.0);
   // (none on nm-sphere: the point-sampled bumps alias, a few cycles per
   // pixel, and the quad's differences of them are chaotic in float.)
   for (auto d : {DerivativeSource::kQuadCoarse, DerivativeSource::kAnalytic})
@@ -232,6 +233,18 @@ TEST(GpuOracle, BeckmannMaterials) {
       ExpectMatchesOracle("sphere", v, d, 1e30, "beckmann:0.1");
       ExpectMatchesOracle("sphere-field", v, d, 1e30, "beckmann:0.04,0.2");
     }
+}
+
+// Seed 003's Blinn-Phong NDF (powers; anisotropic as two powers), with
+// geometric filters and with the normal-map filters it was written for.
+TEST(GpuOracle, BlinnPhongMaterials) {
+  for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic}) {
+    for (const char* v : {"none", "tk19", "k16-beckmann-parallelogram"})
+      ExpectMatchesOracle("sphere", v, d, 1e30, "blinn-phong:200");
+    ExpectMatchesOracle("sphere-field", "k16-beckmann-rect", d, 1e30, "blinn-phong:2000,50");
+    for (const char* v : {"toksvig-bp", "toksvig-map", "lean"})
+      ExpectMatchesOracle("nm-plane", v, d, 20.0, "blinn-phong:800");
+  }
 }
 
 // Known answer: GGX alpha = 0.3 on a unit sphere under a directional light,

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "../shading/quadrature.h"
 #include "shimmer/renderer/normal_map.h"
 #include "shimmer/renderer/scene.h"
 #include "shimmer/renderer/shading.h"
@@ -219,6 +220,20 @@ TEST(NormalMapFilters, IsotropicSpreadWidensAlphaSquaredByTwiceTheSlopeVariance)
   }
 }
 
+// nm_scale scales the added alpha^2: 0 keeps the material, 2 doubles the widening.
+TEST(NormalMapFilters, NmScaleScalesTheAddedVariance) {
+  const auto r = Spread(2e-3, 1e-3);
+  const glm::dvec2 alpha{0.05, 0.08};
+  for (int nmf : {kToksvig, kToksvigMap, kLean, kClean, kVmf, kHdrp}) {
+    const glm::dvec2 one = shading::NormalMapFilterAlpha(nmf, r, alpha, 1);
+    const glm::dvec2 zero = shading::NormalMapFilterAlpha(nmf, r, alpha, 0);
+    const glm::dvec2 two = shading::NormalMapFilterAlpha(nmf, r, alpha, 2);
+    EXPECT_NEAR(glm::length(zero - alpha), 0, 1e-12) << nmf;
+    for (int i = 0; i < 2; ++i)
+      EXPECT_NEAR(two[i] * two[i] - alpha[i] * alpha[i], 2 * (one[i] * one[i] - alpha[i] * alpha[i]), 1e-12) << nmf;
+  }
+}
+
 TEST(NormalMapFilters, LeanIsAnisotropicWhereTheSlopesAreAndCleanIsNot) {
   const auto r = Spread(4e-3, 1e-4);
   const glm::dvec2 alpha{0.05, 0.05};
@@ -274,6 +289,135 @@ TEST(NormalMapFilters, NoNanOrShrinkForDegenerateStatistics) {
         const glm::dvec3 n = shading::NormalMapFilterNormal(nmf, r);
         EXPECT_NEAR(glm::length(n), 1, 1e-9) << nmf;
       }
+}
+
+// A map of two normals in a checkerboard: every 2x2 mean is their average,
+// and the filters' spread follows from its length in closed form.
+TEST(NormalMapFilters, TwoKnownNormalsGiveTheirMeanAndToksvigsSigma) {
+  const glm::dvec3 n1 = glm::normalize(glm::dvec3(0.3, 0.1, 1)), n2 = glm::normalize(glm::dvec3(-0.2, 0.25, 1));
+  std::vector<glm::dvec3> texels;
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) texels.push_back((x + y) % 2 ? n2 : n1);
+  auto map = BuildNormalMap("two", 8, 8, texels);
+  ASSERT_TRUE(map) << map.error();
+  const glm::dvec3 mean = (n1 + n2) * 0.5;
+  for (std::size_t l = 1; l < map->levels.size(); ++l)
+    for (const NormalMapTexel& t : map->levels[l].texels)
+      EXPECT_NEAR(glm::length(glm::dvec3(t.mean_normal) - mean), 0, 1e-6) << l;
+  const NormalMapTexel& top = map->levels.back().texels[0];
+  const shading::NormalMapRead r{glm::dvec4(glm::dvec3(top.mean_normal), top.toksvig_ft), glm::dvec2(top.b),
+                                 glm::dvec3(top.m)};
+  const double len = glm::length(mean), sigma2 = (1 - len) / len;
+  const glm::dvec2 a = shading::NormalMapFilterAlpha(kToksvig, r, {0.05, 0.05});
+  EXPECT_NEAR(a.x * a.x, 0.0025 + 2 * sigma2, 1e-6);
+  // LEAN's covariance of two equally likely slopes t1, t2: (t1 - t2)(t1 - t2)^T / 4.
+  const glm::dvec2 t1{n1.x / n1.z, n1.y / n1.z}, t2{n2.x / n2.z, n2.y / n2.z};
+  const glm::dvec2 lean = shading::NormalMapFilterAlpha(kLean, r, {0.05, 0.05});
+  EXPECT_NEAR(lean.x * lean.x, 0.0025 + 2 * (t1.x - t2.x) * (t1.x - t2.x) / 4, 1e-6);
+  EXPECT_NEAR(lean.y * lean.y, 0.0025 + 2 * (t1.y - t2.y) * (t1.y - t2.y) / 4, 1e-6);
+  EXPECT_NEAR(top.m.z - top.b.x * top.b.y, (t1.x - t2.x) * (t1.y - t2.y) / 4, 1e-6);
+}
+
+// LEAN's moments of h = A sin(2 pi k u) over the tile: t.x = -2 pi k A cos(..)
+// per uv unit, so E[t.x] = 0, E[t.x^2] = (2 pi k A)^2 / 2 (exact for a sampled
+// sinusoid of integer frequency), t.y = 0.
+TEST(NormalMapFilters, LeanMomentsOfASineBumpMatchTheClosedForm) {
+  const int n = 64, k = 3;
+  const double amp = 0.01;
+  std::vector<glm::dvec3> texels;
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const double u = (x + 0.5) / n;
+      const double slope = -2 * kPi * k * amp * std::cos(2 * kPi * k * u);
+      texels.push_back(glm::normalize(glm::dvec3(slope, 0, 1)));
+    }
+  auto map = BuildNormalMap("sine", n, n, texels);
+  ASSERT_TRUE(map) << map.error();
+  const NormalMapTexel& top = map->levels.back().texels[0];
+  const double g = 2 * kPi * k * amp;
+  EXPECT_NEAR(top.b.x, 0, 1e-7);
+  EXPECT_NEAR(top.m.x, g * g / 2, 1e-6 * g * g);
+  EXPECT_NEAR(top.m.y, 0, 1e-9);
+  EXPECT_NEAR(top.m.z, 0, 1e-9);
+}
+
+// The vMF fit's kappa from the mean normal length r against the definition:
+// a vMF of concentration kappa has r = coth(kappa) - 1/kappa; vmf widens
+// alpha^2 by 2 / kappa. Banerjee's approximation is within a few per cent.
+TEST(NormalMapFilters, VmfKappaFromTheMeanLengthMatchesItsDefinition) {
+  for (double kappa : {2.0, 5.0, 20.0, 100.0, 1e3, 1e4}) {
+    const double r = 1 / std::tanh(kappa) - 1 / kappa;
+    const shading::NormalMapRead read{glm::dvec4(0, 0, r, 1), {0, 0}, {0, 0, 0}};
+    const glm::dvec2 a = shading::NormalMapFilterAlpha(kVmf, read, {0.01, 0.01});
+    const double add = a.x * a.x - 1e-4;
+    EXPECT_NEAR(add, std::min(2 / kappa, 1 - 1e-4), 0.05 * 2 / kappa) << kappa;
+  }
+}
+
+// Every normal-map filter changes only the normal and alpha; the NDF it then
+// evaluates stays normalised: the integral of the slope density is 1.
+TEST(NormalMapFilters, WidenedNdfsStayNormalised) {
+  const auto r = Spread(3e-3, 5e-4);
+  for (auto ndf : {shading::Ndf::kGgx, shading::Ndf::kBeckmann})
+    for (int nmf = kNone; nmf <= kHdrp; ++nmf) {
+      const glm::dvec2 a = shading::NormalMapFilterAlpha(nmf, r, {0.02, 0.03});
+      auto over_theta = [&](double phi) {
+        return test::Integrate(
+            [&](double theta) {
+              const double t = std::tan(theta);
+              const glm::dvec2 slope{t * std::cos(phi), t * std::sin(phi)};
+              return shading::SlopeDensity<double>(ndf, slope, a) * t / (std::cos(theta) * std::cos(theta));
+            },
+            0, kPi / 2, {std::atan(a.x), std::atan(3 * a.x), std::atan(30 * a.x)}, 1e-9, 1e-13, 40);
+      };
+      const double integral = test::Integrate(over_theta, 0, 2 * kPi, {kPi / 2, kPi, 1.5 * kPi}, 1e-7, 1e-10, 8);
+      EXPECT_NEAR(integral, 1, 1e-3) << nmf << " " << int(ndf);
+    }
+}
+
+// Texture hardware's level: an isotropic footprint of 2^k texels reads level
+// k exactly (bilinear there).
+TEST(NormalMapShading, AnIsotropicFootprintOfTwoToTheKTexelsReadsLevelK) {
+  const auto map = Procedural("bumps");
+  const Scene s = OneMappedPrimitive(Primitive::Type::kPlane, map);
+  const auto words = PackScene(s);
+  const double texel = 1.0 / map->levels[0].width;
+  for (int k = 1; k < 6; ++k) {
+    const double f = texel * (1 << k);
+    // At a texel centre of level k the bilinear read is that texel.
+    const int side = map->levels[std::size_t(k)].width;
+    const glm::dvec2 uv{(5 + 0.5) / side, (6 + 0.5) / side};
+    const auto read = shading::ReadNormalMap(words, 0, kToksvig, uv, {f, 0}, {0, f});
+    const NormalMapTexel& want = map->levels[std::size_t(k)].texels[std::size_t(6 * side + 5)];
+    EXPECT_NEAR(glm::length(glm::dvec3(read.mean_normal_ft) - glm::dvec3(want.mean_normal)), 0, 1e-6) << k;
+    EXPECT_NEAR(read.m.x, want.m.x, 1e-6) << k;
+  }
+}
+
+// GEOMETRIC+NORMALMAP: the normal-map filter's roughness is the geometric
+// filter's input, so the widenings add in alpha^2: tk19+toksvig is tk19's
+// kernel (on the filtered normals' spread) added to toksvig's alpha^2.
+TEST(NormalMapShading, CombinationsAddTheGeometricKernelToTheNormalMapsAlphaSquared) {
+  const Scene s = LoadScene("nm-plane").value();
+  const auto words = PackScene(s);
+  const shading::CameraDesc cam = CameraAt(CameraPath::kOrbit, s.rig, 0, 30, 48, 48);
+  const int toksvig = shading::FindVariant("toksvig")->id, combo = shading::FindVariant("tk19+toksvig")->id;
+  ASSERT_EQ(combo, toksvig + shading::FindVariant("tk19")->id);
+  int widened = 0;
+  for (auto d : {shading::DerivativeSource::kQuadFine, shading::DerivativeSource::kAnalytic})
+    for (int y = 20; y < 48; y += 4)
+      for (int x = 0; x < 48; x += 5) {
+        const auto t = shading::ShadePixel(words, cam, s.light, s.material, toksvig, d, {}, {x, y});
+        const auto c = shading::ShadePixel(words, cam, s.light, s.material, combo, d, {}, {x, y});
+        if (!t.hit) continue;
+        const auto& f = c.derivatives;
+        const double spread = glm::dot(f.dn_dx, f.dn_dx) + glm::dot(f.dn_dy, f.dn_dy);
+        const double want = std::clamp(t.alpha_eff.x * t.alpha_eff.x + std::min(2 * 0.25 * spread, 0.18), 0.0, 1.0);
+        EXPECT_NEAR(c.alpha_eff.x * c.alpha_eff.x, want, 1e-9 * (1 + want)) << x << "," << y;
+        EXPECT_NEAR(glm::length(c.normal - t.normal), 0, 1e-12);
+        widened += c.alpha_eff.x > t.alpha_eff.x * (1 + 1e-6);
+      }
+  EXPECT_GT(widened, 10);
 }
 
 }  // namespace

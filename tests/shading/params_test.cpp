@@ -15,7 +15,7 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-TEST(ParamFields, NameTheFourParametersOfVariantParams) {
+TEST(ParamFields, NameTheFiveParametersOfVariantParams) {
   std::vector<std::string> names;
   std::vector<double Params<double>::*> members;
   for (const ParamField& r : ParamFields()) {
@@ -26,8 +26,8 @@ TEST(ParamFields, NameTheFourParametersOfVariantParams) {
     EXPECT_TRUE(std::isfinite(r.lo) && std::isfinite(r.hi) && r.lo < r.hi) << r.name;
     EXPECT_FALSE(r.meaning.empty()) << r.name;
   }
-  EXPECT_EQ(names, (std::vector<std::string>{"fp_max", "fp_min_cap", "sigma2", "kappa"}));
-  EXPECT_EQ(members.size(), 4u);
+  EXPECT_EQ(names, (std::vector<std::string>{"fp_max", "fp_min_cap", "sigma2", "kappa", "nm_scale"}));
+  EXPECT_EQ(members.size(), 5u);
   EXPECT_EQ(FindParamField("alpha"), nullptr);
   // Each name reaches its own field.
   Params<double> p{1, 2, 3, 4};
@@ -64,7 +64,7 @@ TEST(ValidateParam, MessageNamesTheParameterTheRangeAndTheValue) {
   EXPECT_EQ(ValidateParam("fp_max", -0.25).error(), "parameter fp_max must be >= 0 and <= 10000, got -0.25");
   EXPECT_EQ(ValidateParam("fp_min_cap", 1e39).error(), "parameter fp_min_cap must be >= 0 and <= 100, got 1e+39");
   EXPECT_EQ(ValidateParam("alpha", 1).error(),
-            "unknown parameter 'alpha' (the parameters are fp_max, fp_min_cap, sigma2, kappa)");
+            "unknown parameter 'alpha' (the parameters are fp_max, fp_min_cap, sigma2, kappa, nm_scale)");
   for (const ParamField& r : ParamFields()) {
     const std::string m = ValidateParam(r.name, -1).error();
     EXPECT_EQ(m.find("0.000000"), std::string::npos) << m;

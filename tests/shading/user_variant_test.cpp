@@ -51,11 +51,11 @@ TEST(UserVariant, DeclarationsGiveNamesDefaultsRangesAndSlots) {
   EXPECT_NE(edited->content_hash, v->content_hash);
 }
 
-TEST(UserVariant, WithoutDeclarationsTheFourBuiltInParametersAreImplied) {
+TEST(UserVariant, WithoutDeclarationsTheFiveBuiltInParametersAreImplied) {
   auto v = ParseUserVariant("FilteredNdf userVariant(...) {}\n", "old.glsl");
   ASSERT_TRUE(v.ok());
   EXPECT_FALSE(v->declared);
-  ASSERT_EQ(v->params.size(), 4u);
+  ASSERT_EQ(v->params.size(), 5u);
   for (std::size_t i = 0; i < 4; ++i) {
     EXPECT_EQ(v->params[i].name, ParamFields()[i].name);
     EXPECT_EQ(v->params[i].slot, &ParamFields()[i]);

@@ -214,7 +214,7 @@ template <class T>
 void Campaign(const VariantInfo& v, int count) {
   const Pools<T>& pools = SharedPools<T>();
   // Both NDFs for every variant: the GGX-only ones must not break on Beckmann either.
-  for (Ndf ndf : {Ndf::kGgx, Ndf::kBeckmann}) {
+  for (Ndf ndf : {Ndf::kGgx, Ndf::kBeckmann, Ndf::kBlinnPhong}) {
     InputGenerator<T> gen(
         pools, 0x9e3779b97f4a7c15ull * std::uint64_t(v.id + 1) + std::uint64_t(ndf) + (sizeof(T) == 4 ? 0 : 0x100));
     glm::vec<2, T> alpha;

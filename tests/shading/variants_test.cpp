@@ -40,7 +40,7 @@ Params<T> DefaultParams(const VariantInfo& v) {
 
 std::vector<Ndf> NdfsOf(const VariantInfo& v) {
   if (v.ggx_only) return {Ndf::kGgx};
-  return {Ndf::kGgx, Ndf::kBeckmann};
+  return {Ndf::kGgx, Ndf::kBeckmann, Ndf::kBlinnPhong};
 }
 
 // Integral of D(h) (n.h) over the hemisphere, in spherical coordinates of h.

@@ -4,6 +4,8 @@
 
 #include <glm/glm.hpp>
 
+#include <cmath>
+
 #include "shimmer/core/result.h"
 
 #include <optional>
@@ -15,7 +17,10 @@
 
 namespace shimmer::shading {
 
-enum class Ndf { kGgx = 0, kBeckmann = 1 };
+enum class Ndf { kGgx = 0, kBeckmann = 1, kBlinnPhong = 2 };
+// Blinn-Phong power <-> roughness, alpha^2 = 2 / (s + 2) (Walter et al. 2007).
+inline double BlinnPhongAlpha(double power) { return std::sqrt(2 / (power + 2)); }
+inline double BlinnPhongPower(double alpha) { return 2 / (alpha * alpha) - 2; }
 
 std::optional<Ndf> ParseNdf(std::string_view name);
 std::string_view NdfName(Ndf ndf);
@@ -38,6 +43,7 @@ struct Params {
   T fp_min_cap = T(0.1);
   T sigma2 = T(0.25);
   T kappa = T(0.18);
+  T nm_scale = 1;  // normal-map filters: scale on the variance they add
 };
 
 template <class T>
@@ -163,7 +169,7 @@ NormalMapRead ReadNormalMap(std::span<const glm::vec4> scene_words, int prim, in
                             glm::dvec2 duv_dx, glm::dvec2 duv_dy);
 // The tangent-space normal and the widened roughness filter `nmf` makes of `read`.
 glm::dvec3 NormalMapFilterNormal(int nmf, const NormalMapRead& read);
-glm::dvec2 NormalMapFilterAlpha(int nmf, const NormalMapRead& read, glm::dvec2 alpha);
+glm::dvec2 NormalMapFilterAlpha(int nmf, const NormalMapRead& read, glm::dvec2 alpha, double scale = 1);
 
 PixelTraceCheck TracePixelBothWays(std::span<const glm::vec4> scene_words, int scene_features, const CameraDesc& camera,
                                    glm::ivec2 px, glm::dvec2 offset);

@@ -107,7 +107,7 @@ struct Moments {
   }
 };
 
-// Seed 003 (/work/shared/seeds/003_fd5f3d677171d779.txt, "The Wild Hunch"
+// Seed 003 (003_fd5f3d677171d779.txt, "The Wild Hunch"
 // and the Toksvig formula before it): "pre-compute the Toksvig Factors from a
 // gaussian-filtered version of each MIP level", baked "with a fixed power ...
 // around 100", f_t = |N_a| / (|N_a| + s (1 - |N_a|)). The Gaussian (sigma one

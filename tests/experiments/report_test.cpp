@@ -62,6 +62,13 @@ std::vector<const Group*> Pointers(const std::vector<Group>& groups) {
   return out;
 }
 
+// Recommendations by "dimension: class".
+std::map<std::string, const Recommendation*> ByClass(const std::vector<Recommendation>& recs) {
+  std::map<std::string, const Recommendation*> by_name;
+  for (const Recommendation& r : recs) by_name[r.dimension + ": " + r.name] = &r;
+  return by_name;
+}
+
 const VariantSummary& Find(const std::vector<VariantSummary>& all, const std::string& label) {
   for (const VariantSummary& v : all)
     if (v.label == label) return v;
@@ -171,8 +178,7 @@ TEST(ReportOverview, RecommendationPicksPerClass) {
   }
   const std::vector<Group> groups = GroupRows(rows);
   const auto recs = Recommend(Pointers(groups));
-  std::map<std::string, const Recommendation*> by_name;
-  for (const Recommendation& r : recs) by_name[r.dimension + ": " + r.name] = &r;
+  const auto by_name = ByClass(recs);
   ASSERT_EQ(by_name.size(), 4u);
   const Recommendation* smooth = by_name.at("roughness: α ≤ 0.02");
   ASSERT_NE(smooth->pick, nullptr);
@@ -216,9 +222,8 @@ TEST(ReportOverview, SgLitShotsAreTheirOwnClass) {
     add("sg-plane", "tk21", 0.9);
   }
   const std::vector<Group> groups = GroupRows(rows);
-  std::map<std::string, const Recommendation*> by_name;
   const auto recs = Recommend(Pointers(groups));
-  for (const Recommendation& r : recs) by_name[r.dimension + ": " + r.name] = &r;
+  const auto by_name = ByClass(recs);
   ASSERT_EQ(by_name.count("light: spherical Gaussian"), 1u);
   const Recommendation* sg = by_name.at("light: spherical Gaussian");
   EXPECT_EQ(sg->tables, 2);
@@ -247,9 +252,8 @@ TEST(ReportOverview, NormalMappedShotsAreTheirOwnClassWithTheirMemory) {
     add("nm-plane", "tk19+clean", 0.25);
   }
   const std::vector<Group> groups = GroupRows(rows);
-  std::map<std::string, const Recommendation*> by_name;
   const auto recs = Recommend(Pointers(groups));
-  for (const Recommendation& r : recs) by_name[r.dimension + ": " + r.name] = &r;
+  const auto by_name = ByClass(recs);
   ASSERT_EQ(by_name.count("normal maps: normal-mapped"), 1u);
   const Recommendation* nm = by_name.at("normal maps: normal-mapped");
   EXPECT_EQ(nm->tables, 2);

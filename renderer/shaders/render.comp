@@ -295,7 +295,12 @@ void main() {
       }
       f = quadFootprint(s, s0, s1, s0, s2);
     }
-    if (NM_FILTER != NMF_NONE) m.alpha = normalMapAlphaAt(s, nf, m.alpha, vp.nm_scale);
+    if (NM_FILTER != NMF_NONE) {
+      NormalMapLobe lobe = normalMapLobeAt(s, nf, m.alpha, vp.nm_scale);
+      m.alpha = lobe.alpha;
+      s = turnedSample(s, lobe.angle);
+      f = turnedFootprint(f, lobe.angle);
+    }
     FilteredNdf ndf = runVariant(m.ndf, m.alpha, f, vp);
     PixelShade sh = shadeSample(s, f, ndf, m, light, VARIANT_ID, vp, QUADRATURE);
     if (!inside) return;

@@ -243,10 +243,9 @@ vec2 normalMapAlphaOf(int mode, NormalMapStats s, vec2 alpha) {
     return o;
   }
   if (mode == NMF_LEAN || mode == NMF_CLEAN) {
-    // LEAN: Sigma = M - B B^T. This keeps its diagonal in the tangent frame
-    // (exact where the map's anisotropy follows the tangent, as for ridges
-    // along u). CLEAN (seed 003: sigma^2 = M_z - (M_x^2 + M_y^2), M_z the
-    // mean squared slope) is read here per axis, (E|t|^2 - |B|^2) / 2, so that
+    // LEAN: Sigma = M - B B^T; its diagonal here, the whole matrix in
+    // normalMapLobe. CLEAN (seed 003: sigma^2 = M_z - (M_x^2 + M_y^2), M_z
+    // the mean squared slope) is read per axis, (E|t|^2 - |B|^2) / 2, so that
     // it equals LEAN and Toksvig on isotropic bumps.
     vec2 var = vec2(max(s.m.x - s.b.x * s.b.x, real(0)), max(s.m.y - s.b.y * s.b.y, real(0)));
     if (mode == NMF_CLEAN) {
@@ -275,4 +274,53 @@ vec2 normalMapAlpha(int mode, NormalMapStats s, vec2 alpha, real scale) {
   vec2 w = normalMapAlphaOf(mode, s, alpha);
   vec2 one = vec2(real(1), real(1));
   return sqrt(min(a2 + (w * w - a2) * scale, max(a2, one)));
+}
+
+// A lobe whose axes are the tangent frame turned by `angle` (radians, from
+// the tangent towards the bitangent), with roughness alpha along them.
+struct NormalMapLobe {
+  vec2 alpha;
+  real angle;
+};
+
+// LEAN as published (Olano and Baker 2010): the slopes' covariance
+// R = diag(alpha^2) + 2 scale Sigma, Sigma = M - B B^T with its off-diagonal
+// term, so ridges at any angle to the tangent give a lobe stretched across
+// them. R is symmetric 2x2: its eigenvectors are the lobe's axes and its
+// eigenvalues the alpha^2 along them; the lobe's density is then the
+// material NDF with those alphas in the turned frame, whose normalisation is
+// 1 / (pi sqrt(det R)) = 1 / (2 pi sqrt(det(R / 2))), the published
+// erratum's 1 / (2 pi sqrt(det Sigma)) for the Gaussian. Other filters keep
+// the frame (angle 0).
+NormalMapLobe normalMapLobe(int mode, NormalMapStats s, vec2 alpha, real scale) {
+  NormalMapLobe l;
+  l.angle = real(0);
+  l.alpha = normalMapAlpha(mode, s, alpha, scale);
+  if (mode != NMF_LEAN) return l;
+  real sxx = max(s.m.x - s.b.x * s.b.x, real(0));
+  real syy = max(s.m.y - s.b.y * s.b.y, real(0));
+  real sxy = s.m.z - s.b.x * s.b.y;
+  sxy = clamp(sxy, -sqrt(sxx * syy), sqrt(sxx * syy));  // Sigma stays positive semi-definite
+  real rxx = alpha.x * alpha.x + real(2) * scale * sxx;
+  real ryy = alpha.y * alpha.y + real(2) * scale * syy;
+  real rxy = real(2) * scale * sxy;
+  real mean = (rxx + ryy) * real(0.5);
+  real dev = sqrt(sqr((rxx - ryy) * real(0.5)) + rxy * rxy);
+  real cap = max(max(alpha.x * alpha.x, alpha.y * alpha.y), real(1));
+  real major = sqrt(min(mean + dev, cap));
+  real minor = sqrt(max(min(mean - dev, cap), real(0)));
+  // The major axis' angle is in [-pi/2, pi/2]; the turn is kept within
+  // +-pi/4 by naming whichever axis is nearer the tangent x, so that
+  // neighbouring pixels' frames (and their hpp differences) stay continuous.
+  real angle = real(0.5) * atan(real(2) * rxy, rxx - ryy);
+  l.alpha = vec2(major, minor);
+  if (angle > real(0.25) * PI) {
+    angle = angle - HALF_PI;
+    l.alpha = vec2(minor, major);
+  } else if (angle < real(-0.25) * PI) {
+    angle = angle + HALF_PI;
+    l.alpha = vec2(minor, major);
+  }
+  l.angle = angle;
+  return l;
 }

@@ -338,12 +338,43 @@ PixelShade shadeSample(SurfaceSample s, ShadingFootprint f, FilteredNdf ndf, Mat
   return o;
 }
 
-// The material roughness a normal-map filter widens to at sample s.
-vec2 normalMapAlphaAt(SurfaceSample s, NormalMapFilter nf, vec2 alpha, real scale) {
-  if (s.prim < 0) return alpha;
+// The lobe (roughness and the turn of its axes) a normal-map filter widens
+// the material to at sample s.
+NormalMapLobe normalMapLobeAt(SurfaceSample s, NormalMapFilter nf, vec2 alpha, real scale) {
+  NormalMapLobe l;
+  l.alpha = alpha;
+  l.angle = real(0);
+  if (s.prim < 0) return l;
   Prim pr = loadPrim(s.prim);
-  if (!isMapped(pr)) return alpha;
-  return normalMapAlpha(nf.mode, normalMapStats(pr.map, nf, s.uv), alpha, scale);
+  if (!isMapped(pr)) return l;
+  return normalMapLobe(nf.mode, normalMapStats(pr.map, nf, s.uv), alpha, scale);
+}
+
+// A slope-space vector of the tangent frame in the frame turned by `angle`.
+vec2 turnedSlope(vec2 v, real c, real s) { return vec2(c * v.x + s * v.y, c * v.y - s * v.x); }
+
+// Sample s and its footprint in the tangent frame turned to a lobe's axes
+// (LEAN's): tangent and bitangent rotate about the normal, and hpp with its
+// derivatives rotate with them.
+SurfaceSample turnedSample(SurfaceSample s, real angle) {
+  if (angle == real(0) || s.prim < 0) return s;
+  real c = cos(angle);
+  real sn = sin(angle);
+  vec3 t = s.tangent * c + s.bitangent * sn;
+  s.bitangent = s.bitangent * c - s.tangent * sn;
+  s.tangent = t;
+  s.hpp = turnedSlope(s.hpp, c, sn);
+  return s;
+}
+
+ShadingFootprint turnedFootprint(ShadingFootprint f, real angle) {
+  if (angle == real(0)) return f;
+  real c = cos(angle);
+  real sn = sin(angle);
+  f.hpp = turnedSlope(f.hpp, c, sn);
+  f.dhpp_dx = turnedSlope(f.dhpp_dx, c, sn);
+  f.dhpp_dy = turnedSlope(f.dhpp_dy, c, sn);
+  return f;
 }
 
 vec2 pixelCentre(ivec2 px) { return vec2(real(px.x) + real(0.5), real(px.y) + real(0.5)); }
@@ -405,7 +436,12 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
     }
     r.f = quadFootprint(r.s, x0, x1, y0, y1);
   }
-  if (nmf != NMF_NONE) m.alpha = normalMapAlphaAt(r.s, nf, m.alpha, vp.nm_scale);
+  if (nmf != NMF_NONE) {
+    NormalMapLobe lobe = normalMapLobeAt(r.s, nf, m.alpha, vp.nm_scale);
+    m.alpha = lobe.alpha;
+    r.s = turnedSample(r.s, lobe.angle);
+    r.f = turnedFootprint(r.f, lobe.angle);
+  }
   r.ndf = evalVariant(variant, m.ndf, m.alpha, r.f, vp);
   r.shade = shadeSample(r.s, r.f, r.ndf, m, light, variant, vp, vec4(real(-1), real(0), real(0), real(0)));
   return r;

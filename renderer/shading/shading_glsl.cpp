@@ -394,6 +394,11 @@ glm::dvec2 NormalMapFilterAlpha(int nmf, const NormalMapRead& read, glm::dvec2 a
   return glsl_f64::normalMapAlpha(nmf, StatsOf(read), alpha, scale);
 }
 
+NormalMapFilterLobe NormalMapLobe(int nmf, const NormalMapRead& read, glm::dvec2 alpha, double scale) {
+  const auto l = glsl_f64::normalMapLobe(nmf, StatsOf(read), alpha, scale);
+  return {l.alpha, l.angle};
+}
+
 PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc& camera, const LightDesc& light,
                        const MaterialDesc& material, int variant, DerivativeSource derivatives,
                        const Params<double>& params, glm::ivec2 px) {

@@ -196,7 +196,8 @@ std::vector<VariantInfo> BuildCatalogue() {
        false},
       {"lean",
        6 * kNormalMapFilterStride,
-       "normal of the mean slope B, alpha^2 += 2 diag(M - B B^T) per tangent axis (anisotropic)",
+       "normal of the mean slope B, lobe covariance diag(alpha^2) + 2 (M - B B^T) on its eigenvectors (anisotropic, "
+       "turned to the ridges)",
        "Olano and Baker, LEAN Mapping, I3D 2010 (seed 003)",
        {kNmScale1},
        true,

@@ -245,6 +245,36 @@ TEST(NormalMapFilters, LeanIsAnisotropicWhereTheSlopesAreAndCleanIsNot) {
   EXPECT_NEAR(clean.x * clean.x + clean.y * clean.y, lean.x * lean.x + lean.y * lean.y, 1e-12);
 }
 
+// LEAN with its whole covariance: ridges at an angle to the tangent give a
+// lobe turned to them, and the turned lobe is exactly diag(alpha^2) + 2 Sigma.
+TEST(NormalMapFilters, LeanTurnsItsLobeToTheRidges) {
+  for (double theta : {0.0, 0.4, kPi / 4, 1.2, -0.7}) {
+    SCOPED_TRACE(theta);
+    // Slopes spread along direction theta (variance 4e-3) and across it (2e-4).
+    const double c = std::cos(theta), s = std::sin(theta);
+    const double va = 4e-3, vb = 2e-4;
+    const double sxx = va * c * c + vb * s * s, syy = va * s * s + vb * c * c, sxy = (va - vb) * c * s;
+    const shading::NormalMapRead r{glm::dvec4(0, 0, 1, 1), {0.01, -0.02},
+                                   {sxx + 1e-4, syy + 4e-4, sxy + 0.01 * -0.02}};
+    const glm::dvec2 alpha{0.05, 0.03};
+    const auto lobe = shading::NormalMapLobe(kLean, r, alpha);
+    // Back from the turned axes: R = Q diag(a^2) Q^T.
+    const double qc = std::cos(lobe.angle), qs = std::sin(lobe.angle);
+    const double a1 = lobe.alpha.x * lobe.alpha.x, a2 = lobe.alpha.y * lobe.alpha.y;
+    EXPECT_NEAR(a1 * qc * qc + a2 * qs * qs, alpha.x * alpha.x + 2 * sxx, 1e-12);
+    EXPECT_NEAR(a1 * qs * qs + a2 * qc * qc, alpha.y * alpha.y + 2 * syy, 1e-12);
+    EXPECT_NEAR((a1 - a2) * qc * qs, 2 * sxy, 1e-12);
+    // The turn stays within 45 degrees (continuous across pixels); the long
+    // axis runs along the ridges' slope direction (up to the material's own
+    // anisotropy).
+    EXPECT_LE(std::abs(lobe.angle), kPi / 4 + 1e-12);
+    const double long_axis = lobe.alpha.x >= lobe.alpha.y ? lobe.angle : lobe.angle + kPi / 2;
+    EXPECT_GT(std::abs(std::cos(long_axis - theta)), 0.99);
+    // The other filters keep the tangent frame.
+    EXPECT_EQ(shading::NormalMapLobe(kToksvig, r, alpha).angle, 0.0);
+  }
+}
+
 TEST(NormalMapFilters, LeanAndCleanShadeWithTheMeanSlopesNormal) {
   shading::NormalMapRead r = Spread(1e-3, 1e-3);
   r.b = {0.2, -0.1};

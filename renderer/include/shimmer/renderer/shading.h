@@ -169,7 +169,15 @@ NormalMapRead ReadNormalMap(std::span<const glm::vec4> scene_words, int prim, in
                             glm::dvec2 duv_dx, glm::dvec2 duv_dy);
 // The tangent-space normal and the widened roughness filter `nmf` makes of `read`.
 glm::dvec3 NormalMapFilterNormal(int nmf, const NormalMapRead& read);
+// Per tangent axis (LEAN: the diagonal of its covariance).
 glm::dvec2 NormalMapFilterAlpha(int nmf, const NormalMapRead& read, glm::dvec2 alpha, double scale = 1);
+// The lobe the renderer shades: roughness along axes turned by `angle` from
+// the tangent (LEAN: its covariance's eigenvectors; 0 for the others).
+struct NormalMapFilterLobe {
+  glm::dvec2 alpha{0};
+  double angle = 0;
+};
+NormalMapFilterLobe NormalMapLobe(int nmf, const NormalMapRead& read, glm::dvec2 alpha, double scale = 1);
 
 PixelTraceCheck TracePixelBothWays(std::span<const glm::vec4> scene_words, int scene_features, const CameraDesc& camera,
                                    glm::ivec2 px, glm::dvec2 offset);

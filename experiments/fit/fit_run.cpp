@@ -74,14 +74,16 @@ struct Objective {
   const FitConfig& config;
   const std::string& material;
   const std::string& variant;
+  const std::string& map;  // "" : each scene's own
   CachedMeasure& measure;
   std::set<std::string>* used;  // ids of every job this fit consulted
 
   // NaN when a render or measurement failed (measure.error() says why).
   ObjectiveValue operator()(double p, const ShotSet& shots) const {
     ObjectiveValue value;
-    for (const std::string& scene : shots.scenes)
+    for (const std::string& shot_scene : shots.scenes)
       for (const std::string& camera : shots.cameras) {
+        const std::string scene = MappedScene(shot_scene, map);
         const Job none_job = SpecJob(spec, scene, material, camera, "none", {}, config.derivatives);
         const Job test_job = SpecJob(spec, scene, material, camera, variant, {{config.param, p}}, config.derivatives);
         const std::string none_id = JobId(none_job), test_id = JobId(test_job);
@@ -136,20 +138,22 @@ nlohmann::json MaterialFit::ToJson() const {
     defaults_json.push_back({{"value", defaults[i]},
                              {"train", experiments::ToJson(train_defaults[i])},
                              {"validate", experiments::ToJson(validate_defaults[i])}});
-  return {{"variant", variant},
-          {"param", param},
-          {"material", material},
-          {"ndf", ndf},
-          {"alpha", alpha},
-          {"bounds", {lo, hi}},
-          {"value", search.best},
-          {"evaluations", search.evaluations},
-          {"ceres_improved", search.ceres_improved},
-          {"seconds", seconds},
-          {"samples", samples},
-          {"train", experiments::ToJson(train)},
-          {"validate", experiments::ToJson(validate)},
-          {"defaults", defaults_json}};
+  nlohmann::json j = {{"variant", variant},
+                      {"param", param},
+                      {"material", material},
+                      {"ndf", ndf},
+                      {"alpha", alpha},
+                      {"bounds", {lo, hi}},
+                      {"value", search.best},
+                      {"evaluations", search.evaluations},
+                      {"ceres_improved", search.ceres_improved},
+                      {"seconds", seconds},
+                      {"samples", samples},
+                      {"train", experiments::ToJson(train)},
+                      {"validate", experiments::ToJson(validate)},
+                      {"defaults", defaults_json}};
+  if (!map.empty()) j["map"] = map;  // fits not per map keep their JSON as it was
+  return j;
 }
 
 FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::function<void(const std::string&)>& log,
@@ -172,16 +176,19 @@ FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::funct
   }
   std::unique_ptr<ResultStore> store = std::move(*opened);
   CachedMeasure measure(store.get(), options, progress);
-  for (const FitConfig& config : spec.fits)
-    for (const std::string& variant : config.variants) {
+  for (const FitConfig& config : spec.fits) {
+    const std::vector<std::string> maps = config.maps.empty() ? std::vector<std::string>{""} : config.maps;
+    for (const std::string& variant : config.variants)
+      for (const std::string& map : maps)
       for (const std::string& material : spec.materials) {
         const shading::MaterialDesc desc = *scene::ParseMaterial(material, {});
         std::set<std::string> used;
-        Objective objective{spec, config, material, variant, measure, &used};
+        Objective objective{spec, config, material, variant, map, measure, &used};
         MaterialFit fit;
         fit.variant = variant;
         fit.param = config.param;
         fit.material = material;
+        fit.map = map;
         fit.ndf = std::string(shading::NdfName(desc.ndf));
         fit.alpha = std::sqrt(desc.alpha.x * desc.alpha.y);
         fit.lo = config.lo;
@@ -200,14 +207,15 @@ FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::funct
           fit.validate_defaults.push_back(objective(d, config.validate));
         }
         if (measure.error()) {
-          outcome.error = Prefixed(variant + " on " + material, *measure.error());
+          outcome.error = Prefixed(variant + " on " + material + (map.empty() ? "" : " with map " + map),
+                                   *measure.error());
           return outcome;
         }
         // The cost of the evaluations as recorded when each was computed, so
         // a rerun served from the cache reports the same time.
         for (const std::string& id : used) fit.seconds += measure.WallSeconds(id);
-        if (Status s = store->InsertFit(variant, config.param, material, fit.search.best, fit.train.j, fit.validate.j,
-                                        fit.ToJson());
+        if (Status s = store->InsertFit(variant, config.param, material, map, fit.search.best, fit.train.j,
+                                        fit.validate.j, fit.ToJson());
             !s) {
           outcome.error = s.failure();
           return outcome;
@@ -215,22 +223,24 @@ FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::funct
         if (log) {
           char line[256];
           std::snprintf(line, sizeof line,
-                        "%s %s=%.4g on %s: J_train %.4g, J_validate %.4g (%d evaluations, %d renders, %.0f s)",
-                        variant.c_str(), config.param.c_str(), fit.search.best, material.c_str(), fit.train.j,
+                        "%s %s=%.4g on %s%s%s: J_train %.4g, J_validate %.4g (%d evaluations, %d renders, %.0f s)",
+                        variant.c_str(), config.param.c_str(), fit.search.best, material.c_str(),
+                        map.empty() ? "" : " with map ", map.c_str(), fit.train.j,
                         fit.validate.j, fit.search.evaluations, measure.rendered() - rendered_before, fit.seconds);
           log(line);
         }
         outcome.fits.push_back(std::move(fit));
       }
-    }
+  }
 
-  // value(alpha) per (variant, param, NDF), across materials.
-  std::map<std::tuple<std::string, std::string, std::string>, FitLaw> laws;
+  // value(alpha) per (variant, param, NDF, map), across materials.
+  std::map<std::tuple<std::string, std::string, std::string, std::string>, FitLaw> laws;
   for (const MaterialFit& f : outcome.fits) {
-    FitLaw& law = laws[{f.variant, f.param, f.ndf}];
+    FitLaw& law = laws[{f.variant, f.param, f.ndf, f.map}];
     law.variant = f.variant;
     law.param = f.param;
     law.ndf = f.ndf;
+    law.map = f.map;
     law.materials.push_back(f.material);
     law.alpha.push_back(f.alpha);
     law.value.push_back(f.search.best);

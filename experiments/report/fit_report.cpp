@@ -22,6 +22,9 @@ std::string Join(const std::vector<std::string>& items) {
 
 std::string Shots(const ShotSet& s) { return "scenes " + Join(s.scenes) + " × cameras " + Join(s.cameras); }
 
+// A fit's row name: its material, and its normal map when the fit is per map.
+std::string Subject(const MaterialFit& f) { return f.map.empty() ? f.material : f.material + " with " + f.map; }
+
 }  // namespace
 
 Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::string& out_dir,
@@ -33,16 +36,13 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
 
   nlohmann::json all = {{"spec", spec.name}, {"fits", nlohmann::json::array()}, {"laws", nlohmann::json::array()}};
   for (const MaterialFit& f : outcome.fits) all["fits"].push_back(f.ToJson());
-  for (const FitLaw& l : outcome.laws)
-    all["laws"].push_back({{"variant", l.variant},
-                           {"param", l.param},
-                           {"ndf", l.ndf},
-                           {"a", l.law.a},
-                           {"b", l.law.b},
-                           {"materials", l.materials},
-                           {"alpha", l.alpha},
-                           {"value", l.value},
-                           {"log_residuals", l.law.residuals}});
+  for (const FitLaw& l : outcome.laws) {
+    nlohmann::json law = {{"variant", l.variant},   {"param", l.param}, {"ndf", l.ndf},
+                          {"a", l.law.a},           {"b", l.law.b},     {"materials", l.materials},
+                          {"alpha", l.alpha},       {"value", l.value}, {"log_residuals", l.law.residuals}};
+    if (!l.map.empty()) law["map"] = l.map;
+    all["laws"].push_back(law);
+  }
   if (Status s = out.Write("fit.json", all.dump(2) + "\n"); !s) return s;
 
   std::ostringstream md;
@@ -72,15 +72,19 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
     md << "Fit of `" << c.param << "` for " << Join(c.variants) << " in [" << c.lo << ", " << c.hi << "], "
        << c.sweep_points << " sweep points, derivatives " << c.derivatives << ", weights w_f = " << c.weights.flicker
        << ", w_s = " << c.weights.spatial << ", w_b = " << c.weights.bias << ". Training: " << Shots(c.train)
-       << ". Validation: " << Shots(c.validate) << ".\n\n";
+       << ". Validation: " << Shots(c.validate) << "."
+       << (c.maps.empty() ? "" : " Once per normal map, every shot's scene rendered with it in place of its own: " +
+                                     Join(c.maps) + ".")
+       << "\n\n";
 
   for (const auto& [key, fits] : by_variant) {
     const MaterialFit& first = *fits.front();
+    const bool per_map = std::any_of(fits.begin(), fits.end(), [](const MaterialFit* f) { return !f->map.empty(); });
     const std::string slug = "fit_" + Slug(first.variant + "_" + first.param);
     md << "## " << first.variant << ": " << first.param << "\n\n![J(p)](" << slug << ".svg)\n\n"
-       << "| material | α | fitted " << first.param << " | J train | J validate |";
+       << "| material |" << (per_map ? " map |" : "") << " α | fitted " << first.param << " | J train | J validate |";
     for (double d : first.defaults) md << " J train at " << d << " | J validate at " << d << " |";
-    md << " evaluations | render s |\n|---|---|---|---|---|";
+    md << " evaluations | render s |\n|---|---|---|---|---|" << (per_map ? "---|" : "");
     for (std::size_t i = 0; i < first.defaults.size(); ++i) md << "---|---|";
     md << "---|---|\n";
     std::ostringstream data, plot;
@@ -90,18 +94,18 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
          << "plot ";
     int block = 0;
     for (const MaterialFit* f : fits) {
-      md << "| " << f->material << " | " << FormatNumber(f->alpha) << " | **" << FormatNumber(f->search.best) << "** | "
+      md << "| " << f->material << " | " << (per_map ? f->map + " | " : "") << FormatNumber(f->alpha) << " | **" << FormatNumber(f->search.best) << "** | "
          << FormatNumber(f->train.j) << " | " << FormatNumber(f->validate.j) << " |";
       for (std::size_t i = 0; i < f->defaults.size(); ++i)
         md << " " << FormatNumber(f->train_defaults[i].j) << " | " << FormatNumber(f->validate_defaults[i].j) << " |";
       md << " " << f->search.evaluations << " | " << FormatNumber(f->seconds, "%.0f") << " |\n";
       auto samples = f->search.samples;
       std::sort(samples.begin(), samples.end());
-      data << "# " << f->material << ": p J\n";
+      data << "# " << Subject(*f) << ": p J\n";
       for (const auto& [p, j] : samples) data << p << " " << j << "\n";
-      data << "\n\n# " << f->material << " optimum\n" << f->search.best << " " << f->train.j << "\n\n\n";
+      data << "\n\n# " << Subject(*f) << " optimum\n" << f->search.best << " " << f->train.j << "\n\n\n";
       plot << (block ? ", \\\n     " : "") << "'" << slug << ".dat' index " << 2 * block
-           << " using 1:2 with linespoints pt 7 ps 0.5 title '" << f->material << "', \\\n     '' index "
+           << " using 1:2 with linespoints pt 7 ps 0.5 title '" << Subject(*f) << "', \\\n     '' index "
            << 2 * block + 1 << " using 1:2 with points pt 6 ps 2 lc 'black' "
            << (block ? "notitle" : "title 'optimum'");
       ++block;
@@ -112,12 +116,12 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
     for (const MaterialFit* f : fits)
       for (std::size_t i = 0; i < f->defaults.size(); ++i)
         if (f->validate.j > f->validate_defaults[i].j)
-          md << "- On held-out shots, " << f->material << "'s fitted value (J " << FormatNumber(f->validate.j)
+          md << "- On held-out shots, " << Subject(*f) << "'s fitted value (J " << FormatNumber(f->validate.j)
              << ") loses to the default " << f->defaults[i] << " (J " << FormatNumber(f->validate_defaults[i].j)
              << ").\n";
     for (const FitLaw& l : outcome.laws) {
       if (l.variant != first.variant || l.param != first.param) continue;
-      md << "\nClosed form for " << l.ndf << " materials (Ceres, Cauchy loss 0.2 on log " << l.param << "): **"
+      md << "\nClosed form for " << l.ndf << " materials" << (l.map.empty() ? "" : " with " + l.map) << " (Ceres, Cauchy loss 0.2 on log " << l.param << "): **"
          << l.param << "(α) = " << FormatNumber(l.law.a) << " · α^" << FormatNumber(l.law.b) << "**\n\n"
          << "| material | α | fitted | closed form | log residual |\n|---|---|---|---|---|\n";
       for (std::size_t i = 0; i < l.alpha.size(); ++i)

@@ -337,7 +337,8 @@ ShotSet ParseShots(const json& j, const std::string& key) {
 FitConfig ParseFit(const json& f, const Spec& spec) {
   if (!f.is_object()) throw SpecError{"fit", "entries must be objects"};
   RejectUnknownKeys(
-      f, {"variants", "param", "bounds", "sweep_points", "defaults", "derivatives", "train", "validate", "weights"},
+      f,
+      {"variants", "param", "bounds", "sweep_points", "defaults", "derivatives", "train", "validate", "weights", "maps"},
       "fit");
   for (const char* required : {"variants", "param", "train", "validate"})
     if (!f.contains(required)) throw SpecError{"fit", std::string("needs \"") + required + "\""};
@@ -368,6 +369,15 @@ FitConfig ParseFit(const json& f, const Spec& spec) {
     c.derivatives = std::string(shading::DerivativeSourceName(Derivatives(f["derivatives"], "derivatives")));
   c.train = ParseShots(f["train"], "train");
   c.validate = ParseShots(f["validate"], "validate");
+  if (f.contains("maps")) {
+    c.maps = StringList(f["maps"], "maps");
+    for (const std::string& map : c.maps)
+      for (const ShotSet* shots : {&c.train, &c.validate})
+        for (const std::string& scene : shots->scenes) {
+          const auto loaded = scene::LoadScene(MappedScene(scene, map));
+          if (!loaded) throw SpecError{"maps", loaded.error()};
+        }
+  }
   if (f.contains("weights")) {
     const json& w = f["weights"];
     if (!w.is_object()) throw SpecError{"weights", "must be {\"flicker\", \"spatial\", \"bias\"}"};
@@ -625,6 +635,10 @@ Spec ParseSpecObject(const json& j, const std::filesystem::path& base) {
 }
 
 }  // namespace
+
+std::string MappedScene(const std::string& scene, const std::string& map) {
+  return map.empty() ? scene : scene + "@" + map;
+}
 
 Result<Spec> ParseSpec(std::string_view text, const std::string& source) {
   auto j = ParseJson(text, source);

@@ -59,8 +59,29 @@ CREATE TABLE IF NOT EXISTS fits (
   value REAL, j_train REAL, j_validate REAL,
   result TEXT NOT NULL,
   finished_at TEXT DEFAULT (datetime('now')),
-  PRIMARY KEY (variant, param, material)
+  map TEXT NOT NULL DEFAULT '',
+  PRIMARY KEY (variant, param, material, map)
 );
+)sql";
+
+// Stores from before fits per normal map keyed a fit by (variant, param,
+// material); SQLite cannot change a primary key in place, so the rows move to
+// a new table in one transaction.
+constexpr const char* kFitsByMap = R"sql(
+BEGIN;
+CREATE TABLE fits_by_map (
+  variant TEXT NOT NULL, param TEXT NOT NULL, material TEXT NOT NULL,
+  value REAL, j_train REAL, j_validate REAL,
+  result TEXT NOT NULL,
+  finished_at TEXT DEFAULT (datetime('now')),
+  map TEXT NOT NULL DEFAULT '',
+  PRIMARY KEY (variant, param, material, map)
+);
+INSERT INTO fits_by_map (variant, param, material, value, j_train, j_validate, result, finished_at)
+  SELECT variant, param, material, value, j_train, j_validate, result, finished_at FROM fits;
+DROP TABLE fits;
+ALTER TABLE fits_by_map RENAME TO fits;
+COMMIT;
 )sql";
 
 struct Statement {
@@ -136,10 +157,11 @@ std::string SqlQuote(const std::string& text) {
   return out + "'";
 }
 
-std::set<std::string> ColumnsOf(sqlite3* db, const std::string& schema) {
+std::set<std::string> ColumnsOf(sqlite3* db, const std::string& schema, const std::string& table = "jobs") {
   std::set<std::string> columns;
   Statement s;
-  if (sqlite3_prepare_v2(db, ("PRAGMA " + schema + ".table_info(jobs)").c_str(), -1, &s.stmt, nullptr) != SQLITE_OK)
+  if (sqlite3_prepare_v2(db, ("PRAGMA " + schema + ".table_info(" + table + ")").c_str(), -1, &s.stmt, nullptr) !=
+      SQLITE_OK)
     return columns;
   while (sqlite3_step(s.stmt) == SQLITE_ROW)
     columns.insert(reinterpret_cast<const char*>(sqlite3_column_text(s.stmt, 1)));
@@ -268,6 +290,11 @@ Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, 
     if (!columns.count(column))
       if (Status s = store->Exec(std::string("ALTER TABLE jobs ADD COLUMN ") + column + " TEXT;"); !s)
         return store->Failure("cannot add the " + std::string(column) + " column");
+  if (!ColumnsOf(db, "main", "fits").count("map"))
+    if (Status s = store->Exec(kFitsByMap); !s) {
+      store->Exec("ROLLBACK;");
+      return store->Failure("cannot key the fits by normal map");
+    }
   return store;
 }
 
@@ -511,11 +538,12 @@ Result<std::vector<BenchmarkCost>> ResultStore::Benchmarks() {
 }
 
 Status ResultStore::InsertFit(const std::string& variant, const std::string& param, const std::string& material,
-                              double value, double j_train, double j_validate, const nlohmann::json& result) {
+                              const std::string& map, double value, double j_train, double j_validate,
+                              const nlohmann::json& result) {
   Statement s;
   if (sqlite3_prepare_v2(db_,
-                         "INSERT OR REPLACE INTO fits (variant, param, material, value, j_train, j_validate, result) "
-                         "VALUES (?,?,?,?,?,?,?)",
+                         "INSERT OR REPLACE INTO fits (variant, param, material, value, j_train, j_validate, result, "
+                         "map) VALUES (?,?,?,?,?,?,?,?)",
                          -1, &s.stmt, nullptr) != SQLITE_OK)
     return Failure("cannot write a fit");
   sqlite3_bind_text(s.stmt, 1, variant.c_str(), -1, SQLITE_TRANSIENT);
@@ -526,6 +554,7 @@ Status ResultStore::InsertFit(const std::string& variant, const std::string& par
   sqlite3_bind_double(s.stmt, 6, j_validate);
   const std::string text = result.dump();
   sqlite3_bind_text(s.stmt, 7, text.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_text(s.stmt, 8, map.c_str(), -1, SQLITE_TRANSIENT);
   // One statement is its own transaction in SQLite: the row is whole or absent.
   if (sqlite3_step(s.stmt) != SQLITE_DONE) return Failure("cannot write a fit");
   return Ok();
@@ -533,7 +562,10 @@ Status ResultStore::InsertFit(const std::string& variant, const std::string& par
 
 Result<std::vector<nlohmann::json>> ResultStore::Fits() {
   // A store written before any fit ran (or by an older shimmer) has no fits table.
-  auto rows = JsonRows(db_, "SELECT result FROM fits ORDER BY variant, param, material");
+  // A store opened read-only is not migrated: one from before maps has no map column.
+  const bool by_map = ColumnsOf(db_, "main", "fits").count("map") > 0;
+  auto rows = JsonRows(db_, by_map ? "SELECT result FROM fits ORDER BY variant, param, material, map"
+                                   : "SELECT result FROM fits ORDER BY variant, param, material");
   if (!rows) return Result<std::vector<nlohmann::json>>::Failure(path_ + ": a fit row is damaged");
   return *rows;
 }

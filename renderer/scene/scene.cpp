@@ -385,7 +385,44 @@ std::vector<std::string_view> BuiltinSceneNames() {
           "sg-plane",        "sg-bumpy-plane", "nm-plane",     "nm-sphere",   "nm-magnify"};
 }
 
+namespace {
+
+// "SCENE@MAP": a fit per map (and any spec) renders one scene's geometry,
+// light and rig with each of several maps, without a scene file per map.
+Result<Scene> SceneWithMap(const std::string& name, std::size_t at) {
+  const std::string base = name.substr(0, at), map = name.substr(at + 1);
+  if (base.empty() || map.empty())
+    return Result<Scene>::Failure("scene '" + name + "': SCENE@MAP needs both a scene and a normal map");
+  auto scene = LoadScene(base);
+  if (!scene) return scene.failure();
+  bool procedural = false;
+  for (auto n : ProceduralNormalMapNames()) procedural |= n == map;
+  int replaced = 0;
+  for (Primitive& p : scene->primitives) {
+    if (!p.normal_map) continue;
+    NormalMapSource source;
+    source.strength = p.normal_map_source.strength;
+    (procedural ? source.procedural : source.file) = map;
+    auto loaded = LoadNormalMap(source);
+    if (!loaded) return Result<Scene>::Failure("scene '" + name + "': " + loaded.error());
+    p.normal_map = *loaded;
+    p.normal_map_source = source;
+    ++replaced;
+  }
+  if (replaced == 0)
+    return Result<Scene>::Failure("scene '" + name + "': '" + base + "' has no normal map for '" + map +
+                                  "' to replace");
+  scene->name = name;
+  return scene;
+}
+
+}  // namespace
+
 Result<Scene> LoadScene(const std::string& name) {
+  std::error_code exists_ec;
+  if (const std::size_t at = name.rfind('@');
+      at != std::string::npos && !std::filesystem::is_regular_file(name, exists_ec))
+    return SceneWithMap(name, at);
   if (name == "sphere") return SphereScene();
   if (name == "sphere-field") return SphereFieldScene();
   if (name == "wires") return WiresScene();

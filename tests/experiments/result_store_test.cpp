@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <algorithm>
 #include <cmath>
@@ -19,6 +20,41 @@ namespace fs = std::filesystem;
 
 using shimmer::testing::TempDir;
 using testing::MakeResult;
+
+// A store from before fits per normal map (fits keyed by variant, param and
+// material) opens with its fit rows kept, and then holds one row per map.
+TEST(ResultStore, FitsFromBeforeMapsAreKeptAndKeyedByMap) {
+  TempDir dir;
+  const std::string path = (dir.path() / "old.db").string();
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db,
+                         "CREATE TABLE fits (variant TEXT NOT NULL, param TEXT NOT NULL, material TEXT NOT NULL, "
+                         "value REAL, j_train REAL, j_validate REAL, result TEXT NOT NULL, "
+                         "finished_at TEXT DEFAULT (datetime('now')), PRIMARY KEY (variant, param, material));"
+                         "INSERT INTO fits (variant, param, material, value, j_train, j_validate, result) "
+                         "VALUES ('lean', 'nm_scale', 'ggx:0.05', 0.5, 1, 2, '{\"value\": 0.5}');",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+
+  auto opened = ResultStore::Open(path);
+  ASSERT_TRUE(opened) << opened.error();
+  ResultStore& store = **opened;
+  auto rows = store.Fits();
+  ASSERT_TRUE(rows) << rows.error();
+  ASSERT_EQ(rows->size(), 1u);
+  EXPECT_EQ((*rows)[0]["value"], 0.5);
+  for (const char* map : {"bumps", "ridges"})
+    ASSERT_TRUE(store.InsertFit("lean", "nm_scale", "ggx:0.05", map, 2, 1, 1, {{"map", map}}));
+  // The same key again replaces its row.
+  ASSERT_TRUE(store.InsertFit("lean", "nm_scale", "ggx:0.05", "ridges", 3, 1, 1, {{"map", "ridges"}, {"again", 1}}));
+  rows = store.Fits();
+  ASSERT_EQ(rows->size(), 3u);
+  EXPECT_EQ((*rows)[0]["value"], 0.5);  // map "" sorts first
+  EXPECT_EQ((*rows)[1]["map"], "bumps");
+  EXPECT_EQ((*rows)[2]["again"], 1);
+}
 
 TEST(ResultStore, InsertThenFindAndReadBack) {
   TempDir dir;

@@ -305,6 +305,44 @@ TEST(FitCli, FittedValueBeatsBothDefaultsOnItsObjective) {
   EXPECT_EQ(rows[0]["value"], fit["value"]);
 }
 
+// A fit per normal map: a row per map in the report and the store, each
+// measured on shots rendered with its own map (different maps, different J).
+TEST(FitCli, AFitPerMapFitsEachMapOnItsOwnShots) {
+  Workspace ws;
+  std::ofstream(ws.dir / "fit.json") << R"({
+    "name": "mapfit", "scenes": ["nm-plane"], "materials": ["ggx:0.05"], "cameras": ["orbit"],
+    "variants": ["none"], "size": [24, 24], "frames": 4, "reference": {"spp": 2, "replicates": 2},
+    "fit": {
+      "variants": ["lean"], "param": "nm_scale", "bounds": [0.1, 10], "sweep_points": 3, "defaults": [1],
+      "maps": ["bumps", "ridges"],
+      "train": {"scenes": ["nm-plane"], "cameras": ["orbit"]},
+      "validate": {"scenes": ["nm-plane"], "cameras": ["pan"]}
+    }
+  })";
+  ASSERT_EQ(std::system(("cd " + ws.dir.string() + " && " + SHIMMER_EXE +
+                         " fit fit.json --db fit.db --work frames -o report >>log.txt 2>&1")
+                            .c_str()),
+            0);
+  std::ifstream in(ws.dir / "report" / "fit.json");
+  const nlohmann::json report = nlohmann::json::parse(in);
+  ASSERT_EQ(report["fits"].size(), 2u);
+  EXPECT_EQ(report["fits"][0]["map"], "bumps");
+  EXPECT_EQ(report["fits"][1]["map"], "ridges");
+  EXPECT_EQ(report["fits"][0]["train"]["shots"][0]["scene"], "nm-plane@bumps");
+  EXPECT_EQ(report["fits"][1]["validate"]["shots"][0]["scene"], "nm-plane@ridges");
+  // At the same nm_scale the two maps give different shots.
+  const auto& d0 = report["fits"][0]["defaults"][0]["train"]["shots"][0];
+  const auto& d1 = report["fits"][1]["defaults"][0]["train"]["shots"][0];
+  EXPECT_NE(d0["relmse_none"].get<double>(), d1["relmse_none"].get<double>());
+  std::ifstream md_in(ws.dir / "report" / "fit.md");
+  const std::string md((std::istreambuf_iterator<char>(md_in)), {});
+  EXPECT_NE(md.find("| material | map | α |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| ggx:0.05 | ridges |"), std::string::npos) << md;
+  auto store = ResultStore::Open((ws.dir / "fit.db").string(), ResultStore::Mode::kReadOnly);
+  ASSERT_TRUE(store) << store.error();
+  EXPECT_EQ((*store)->Fits()->size(), 2u);
+}
+
 // A user's file beside the built-in variants: it runs, resumes without
 // recomputing, is reported with its file, and the documented tk19 file
 // measures exactly what the built-in tk19 does.

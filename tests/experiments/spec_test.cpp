@@ -249,6 +249,24 @@ TEST(Spec, BadFitConfigurationsAreRejectedUpFront) {
       ggx,
       R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "validate": {"scenes": ["sphere"], "cameras": ["spin"]}, "train": {"scenes": ["sphere"], "cameras": ["orbit"]}})");
   EXPECT_NE(e.find("spin: unknown camera path"), std::string::npos) << e;
+  // A fit per normal map needs every shot's scene to have a map to replace.
+  const std::string nm_shots = R"("train": {"scenes": ["nm-plane"], "cameras": ["orbit"]},
+  "validate": {"scenes": ["sphere"], "cameras": ["dolly"]})";
+  e = error(ggx, R"({"variants": ["lean"], "param": "nm_scale", "maps": ["bumps"], )" + nm_shots + "}");
+  EXPECT_NE(e.find("maps: scene 'sphere@bumps': 'sphere' has no normal map"), std::string::npos) << e;
+  e = error(ggx, R"({"variants": ["lean"], "param": "nm_scale", "maps": ["bumbs"], )" + kShots + "}");
+  EXPECT_NE(e.find("maps: "), std::string::npos) << e;
+}
+
+TEST(Spec, AFitPerNormalMapParses) {
+  auto r = ParseSpec(FitSpec(R"(["ggx:0.05"])", R"({"variants": ["lean"], "param": "nm_scale",
+  "maps": ["bumps", "ridges"], "train": {"scenes": ["nm-plane"], "cameras": ["orbit"]},
+  "validate": {"scenes": ["nm-sphere"], "cameras": ["dolly"]}})"),
+                     "f.json");
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_EQ(r->fits[0].maps, (std::vector<std::string>{"bumps", "ridges"}));
+  EXPECT_EQ(MappedScene("nm-plane", "ridges"), "nm-plane@ridges");
+  EXPECT_EQ(MappedScene("nm-plane", ""), "nm-plane");
 }
 
 }  // namespace

@@ -164,6 +164,36 @@ TEST(SceneLoad, BuiltinsAndUnknownNames) {
   EXPECT_NE(bad.error().find("unknown scene 'no-such-scene'"), std::string::npos) << bad.error();
 }
 
+// "SCENE@MAP": the scene with its maps replaced, everything else kept.
+TEST(SceneLoad, AMapSuffixReplacesTheScenesNormalMaps) {
+  auto base = LoadScene("nm-plane");
+  auto ridged = LoadScene("nm-plane@ridges");
+  ASSERT_TRUE(base.ok() && ridged.ok()) << ridged.error();
+  EXPECT_EQ(ridged->name, "nm-plane@ridges");
+  ASSERT_EQ(ridged->primitives.size(), base->primitives.size());
+  const Primitive& p = ridged->primitives[0];
+  ASSERT_TRUE(p.normal_map);
+  EXPECT_EQ(p.normal_map_source.procedural, "ridges");
+  EXPECT_EQ(p.normal_map, LoadNormalMap(p.normal_map_source).value());  // the process's one copy
+  EXPECT_NE(p.normal_map, base->primitives[0].normal_map);
+  EXPECT_EQ(p.normal_map_scale, base->primitives[0].normal_map_scale);
+  EXPECT_EQ(ridged->rig.distance, base->rig.distance);
+  EXPECT_EQ(ridged->material.alpha, base->material.alpha);
+
+  const std::pair<const char*, const char*> bad[] = {
+      {"sphere@bumps", "'sphere' has no normal map for 'bumps' to replace"},
+      {"nm-plane@no-such-map.png", "no-such-map.png"},
+      {"nm-plane@", "needs both a scene and a normal map"},
+      {"@bumps", "needs both a scene and a normal map"},
+      {"no-such-scene@bumps", "unknown scene 'no-such-scene'"},
+  };
+  for (const auto& [name, message] : bad) {
+    auto s = LoadScene(name);
+    ASSERT_FALSE(s.ok()) << name;
+    EXPECT_NE(s.error().find(message), std::string::npos) << name << ": " << s.error();
+  }
+}
+
 TEST(CameraPath, DeterministicMovingAndOrthonormal) {
   CameraRig rig;
   for (auto name : CameraPathNames()) {

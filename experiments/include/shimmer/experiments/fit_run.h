@@ -43,6 +43,7 @@ struct ObjectiveValue {
 
 struct MaterialFit {
   std::string variant, param, material, ndf;
+  std::string map;  // the normal map every shot rendered with (FitConfig::maps); "": each scene's own
   double alpha = 0;  // sqrt(alpha_x alpha_y)
   double lo = 0, hi = 0;
   Fit1D search;                    // every evaluation of J on the training shots
@@ -54,7 +55,7 @@ struct MaterialFit {
 };
 
 struct FitLaw {
-  std::string variant, param, ndf;
+  std::string variant, param, ndf, map;
   std::vector<std::string> materials;
   std::vector<double> alpha, value;
   PowerLaw law;

@@ -128,10 +128,12 @@ class ResultStore {
   Status InsertBenchmarks(const std::vector<BenchmarkCost>& costs);  // one transaction
   Result<std::vector<BenchmarkCost>> Benchmarks();
 
-  // Fit results (table `fits`), one row per (variant, parameter, material) of
-  // a fit, replaced when the fit is run again; `result` is the fit's JSON.
-  Status InsertFit(const std::string& variant, const std::string& param, const std::string& material, double value,
-                   double j_train, double j_validate, const nlohmann::json& result);
+  // Fit results (table `fits`), one row per (variant, parameter, material,
+  // normal map; "" for a fit not per map) of a fit, replaced when the fit is
+  // run again; `result` is the fit's JSON.
+  Status InsertFit(const std::string& variant, const std::string& param, const std::string& material,
+                   const std::string& map, double value, double j_train, double j_validate,
+                   const nlohmann::json& result);
   Result<std::vector<nlohmann::json>> Fits();
 
  private:

@@ -70,7 +70,8 @@ struct ShotSet {
 // One `fit` entry: for each of the spec's top-level materials (not those of
 // its groups) and each variant, the value of `param` in [lo, hi] that
 // minimises the objective on `train`, validated on `validate` against the
-// published `defaults`.
+// published `defaults`. With `maps`, once per normal map as well: every shot's
+// scene renders with that map in place of its own (scene "SCENE@MAP").
 struct FitConfig {
   std::vector<std::string> variants;
   std::string param = "fp_max";
@@ -80,7 +81,12 @@ struct FitConfig {
   std::string derivatives = "quad";
   ShotSet train, validate;
   FitWeights weights;
+  std::vector<std::string> maps;  // normal maps (built-in names or files); empty: each scene's own
 };
+
+// "SCENE@MAP" (scene::LoadScene): `scene` with every normal map replaced by
+// `map`; `scene` itself when `map` is empty.
+std::string MappedScene(const std::string& scene, const std::string& map);
 
 // One cross product of shots and variants: scenes x materials x cameras x
 // variants (with parameter values) x derivative sources.

@@ -60,7 +60,164 @@ struct LogPowerResidual {
   }
 };
 
+// The ND search's coordinates: u = log p on logarithmic axes, p otherwise.
+double ToU(const FitAxis& a, double p) { return a.Logarithmic() ? std::log(p) : p; }
+double FromU(const FitAxis& a, double u) { return a.Logarithmic() ? std::exp(u) : u; }
+double StepU(const FitAxis& a) { return a.Logarithmic() ? 0.1 : 0.05 * (a.hi - a.lo); }
+
+class MemoObjectiveND {
+ public:
+  MemoObjectiveND(const std::function<double(const std::vector<double>&)>& objective, const std::vector<FitAxis>& axes,
+                  FitND* fit)
+      : objective_(objective), axes_(axes), fit_(fit) {}
+  double operator()(const std::vector<double>& u) {
+    std::vector<long long> key;
+    for (std::size_t i = 0; i < u.size(); ++i) key.push_back(std::llround(u[i] / StepU(axes_[i]) * 1e5));
+    if (auto it = memo_.find(key); it != memo_.end()) return it->second;
+    std::vector<double> p;
+    for (std::size_t i = 0; i < u.size(); ++i) p.push_back(FromU(axes_[i], u[i]));
+    const double j = objective_(p);
+    fit_->samples.push_back({p, j});
+    ++fit_->evaluations;
+    return memo_[key] = j;
+  }
+
+ private:
+  const std::function<double(const std::vector<double>&)>& objective_;
+  const std::vector<FitAxis>& axes_;
+  FitND* fit_;
+  std::map<std::vector<long long>, double> memo_;
+};
+
+// Newton on the smoothed gradient, as in 1-D: the residual is the central
+// difference gradient g_i(u) = (J(u + h_i e_i) - J(u - h_i e_i)) / 2 h_i, its
+// Jacobian the difference Hessian (the mixed terms from the four corners
+// u +- h_i e_i +- h_j e_j), and Ceres drives g to zero inside the grid cell.
+class SmoothedGradientND : public ceres::CostFunction {
+ public:
+  SmoothedGradientND(MemoObjectiveND* j, std::vector<double> h) : j_(j), h_(std::move(h)) {
+    set_num_residuals(int(h_.size()));
+    mutable_parameter_block_sizes()->push_back(int(h_.size()));
+  }
+  bool Evaluate(double const* const* params, double* residual, double** jacobian) const override {
+    const std::size_t n = h_.size();
+    const std::vector<double> u(params[0], params[0] + n);
+    auto at = [&](std::size_t i, double si, std::size_t k, double sk) {
+      std::vector<double> v = u;
+      v[i] += si * h_[i];
+      v[k] += sk * h_[k];
+      return (*j_)(v);
+    };
+    const double j0 = (*j_)(u);
+    if (!std::isfinite(j0)) return false;
+    std::vector<double> jp(n), jm(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      jp[i] = at(i, 1, i, 0);
+      jm[i] = at(i, -1, i, 0);
+      residual[i] = (jp[i] - jm[i]) / (2 * h_[i]);
+      if (!std::isfinite(residual[i])) return false;
+    }
+    if (jacobian && jacobian[0])
+      for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t k = 0; k < n; ++k) {
+          double d;
+          if (i == k) {
+            d = (jp[i] - 2 * j0 + jm[i]) / (h_[i] * h_[i]);
+          } else if (k < i) {
+            d = jacobian[0][k * n + i];  // symmetric: computed on row k
+          } else {
+            d = (at(i, 1, k, 1) - at(i, 1, k, -1) - at(i, -1, k, 1) + at(i, -1, k, -1)) / (4 * h_[i] * h_[k]);
+          }
+          if (!std::isfinite(d)) return false;
+          jacobian[0][i * n + k] = d;
+        }
+    return true;
+  }
+
+ private:
+  MemoObjectiveND* j_;
+  std::vector<double> h_;
+};
+
 }  // namespace
+
+FitND MinimizeND(const std::function<double(const std::vector<double>&)>& objective, const std::vector<FitAxis>& axes,
+                 int grid_points, const std::vector<std::vector<double>>& extra_points) {
+  FitND fit;
+  MemoObjectiveND j(objective, axes, &fit);
+  const std::size_t n = axes.size();
+  // Grid coordinates per axis, then every combination (the last axis fastest).
+  std::vector<std::vector<double>> ticks(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ulo = ToU(axes[i], axes[i].lo), uhi = ToU(axes[i], axes[i].hi);
+    for (int k = 0; k < grid_points; ++k)
+      ticks[i].push_back(grid_points == 1 ? ulo : ulo + (uhi - ulo) * double(k) / (grid_points - 1));
+  }
+  std::vector<std::vector<double>> points;
+  std::vector<int> index(n, 0);
+  for (bool more = n > 0; more;) {
+    std::vector<double> u(n);
+    for (std::size_t i = 0; i < n; ++i) u[i] = ticks[i][index[i]];
+    points.push_back(u);
+    more = false;
+    for (std::size_t i = n; i-- > 0;) {
+      if (++index[i] < grid_points) {
+        more = true;
+        break;
+      }
+      index[i] = 0;
+    }
+  }
+  for (const std::vector<double>& p : extra_points) {
+    bool inside = p.size() == n;
+    for (std::size_t i = 0; inside && i < n; ++i) inside = p[i] >= axes[i].lo && p[i] <= axes[i].hi;
+    if (!inside) continue;
+    std::vector<double> u(n);
+    for (std::size_t i = 0; i < n; ++i) u[i] = ToU(axes[i], p[i]);
+    points.push_back(u);
+  }
+  std::size_t best = 0;
+  for (std::size_t k = 0; k < points.size(); ++k)
+    if (j(points[k]) < j(points[best])) best = k;
+  fit.objective = j(points[best]);
+  for (std::size_t i = 0; i < n; ++i) fit.best.push_back(FromU(axes[i], points[best][i]));
+
+  // Refine inside the grid cell around the best point (one tick either way
+  // on every axis), the difference steps kept inside the bounds.
+  std::vector<double> u = points[best], h(n);
+  std::vector<double> blo(n), bhi(n);
+  bool room = n > 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    h[i] = StepU(axes[i]);
+    const double ulo = ToU(axes[i], axes[i].lo), uhi = ToU(axes[i], axes[i].hi);
+    const double tick = grid_points > 1 ? (uhi - ulo) / (grid_points - 1) : uhi - ulo;
+    blo[i] = std::max(u[i] - tick, ulo + h[i]);
+    bhi[i] = std::min(u[i] + tick, uhi - h[i]);
+    room = room && blo[i] < bhi[i];
+    u[i] = std::clamp(u[i], blo[i], bhi[i]);
+  }
+  if (room) {
+    ceres::Problem problem;
+    problem.AddResidualBlock(new SmoothedGradientND(&j, h), nullptr, u.data());
+    for (std::size_t i = 0; i < n; ++i) {
+      problem.SetParameterLowerBound(u.data(), int(i), blo[i]);
+      problem.SetParameterUpperBound(u.data(), int(i), bhi[i]);
+    }
+    ceres::Solver::Options options;
+    // As in 1-D: J is known to about a percent, and an iteration costs up
+    // to 2N^2 + 1 renders of every shot.
+    options.max_num_iterations = 6;
+    options.function_tolerance = 1e-4;
+    options.parameter_tolerance = 1e-3;
+    options.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &problem, &summary);
+    j(u);
+  }
+  for (const auto& [p, v] : fit.samples)
+    if (v < fit.objective) fit.best = p, fit.objective = v, fit.ceres_improved = true;
+  return fit;
+}
 
 Fit1D Minimize1D(const std::function<double(double)>& objective, double lo, double hi, int sweep_points,
                  const std::vector<double>& extra_points) {

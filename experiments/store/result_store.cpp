@@ -292,7 +292,7 @@ Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, 
         return store->Failure("cannot add the " + std::string(column) + " column");
   if (!ColumnsOf(db, "main", "fits").count("map"))
     if (Status s = store->Exec(kFitsByMap); !s) {
-      store->Exec("ROLLBACK;");
+      (void)store->Exec("ROLLBACK;");  // the failure reported is the one above
       return store->Failure("cannot key the fits by normal map");
     }
   return store;

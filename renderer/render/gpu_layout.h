@@ -25,7 +25,7 @@ struct Push {
   float params[4];
   std::int32_t round[4];
   float target[4];
-  float params2[4];  // nm_scale, 0, 0, 0
+  float params2[4];  // nm_scale, curvature_scale, curvature_bias, curvature_exponent
 };
 
 // std140/std430 place vec4 members at multiples of 16 bytes with no padding

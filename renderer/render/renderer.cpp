@@ -296,7 +296,8 @@ Result<Frame> Renderer::RenderFrame(int index) {
   const auto& p = im.variant.params;
   push.params[0] = float(p.fp_max), push.params[1] = float(p.fp_min_cap);
   push.params[2] = float(p.sigma2), push.params[3] = float(p.kappa);
-  push.params2[0] = float(p.nm_scale);
+  push.params2[0] = float(p.nm_scale), push.params2[1] = float(p.curvature_scale);
+  push.params2[2] = float(p.curvature_bias), push.params2[3] = float(p.curvature_exponent);
   push.round[1] = index;
   push.round[2] = s.reference_replicates;
   push.round[3] = std::bit_cast<std::int32_t>(s.seed);

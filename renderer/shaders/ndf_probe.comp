@@ -9,7 +9,7 @@
 layout(local_size_x = 1) in;
 layout(constant_id = 0) const int VARIANT_ID = 0;
 
-// In: words 0..7 as ndf_probe.cpp writes them; out: word 8.
+// In: words 0..8 as ndf_probe.cpp writes them; out: word 9.
 layout(std430, binding = 0) buffer ProbeBuf { vec4 words[]; } probe;
 
 #include "core.glsl"
@@ -36,11 +36,14 @@ void main() {
   p.fp_min_cap = probe.words[7].y;
   p.sigma2 = probe.words[7].z;
   p.kappa = probe.words[7].w;
-  p.nm_scale = real(1);  // the probe evaluates NDFs; normal maps need a scene
+  p.nm_scale = probe.words[8].x;  // a user variant may read its slot; normal maps need a scene
+  p.curvature_scale = probe.words[8].y;
+  p.curvature_bias = probe.words[8].z;
+  p.curvature_exponent = probe.words[8].w;
 #ifdef SHIMMER_USER_VARIANT
   FilteredNdf r = userVariant(ndf, alpha, f, userParams(p));
 #else
   FilteredNdf r = evalVariant(VARIANT_ID, ndf, alpha, f, p);
 #endif
-  probe.words[8] = vec4(r.slope_density, r.density, r.alpha_eff);
+  probe.words[9] = vec4(r.slope_density, r.density, r.alpha_eff);
 }

@@ -61,7 +61,7 @@ layout(push_constant) uniform Push {
   vec4 params;   // fp_max, fp_min_cap, sigma2, kappa
   ivec4 round;   // reference round, frame index, replicates K, seed (uint bits)
   vec4 target;   // relative standard error target (0: off), luminance floor
-  vec4 params2;  // nm_scale, 0, 0, 0
+  vec4 params2;  // nm_scale, curvature_scale, curvature_bias, curvature_exponent
 } pc;
 
 vec4 sceneWord(int i) { return scene.words[i]; }
@@ -254,6 +254,9 @@ void main() {
   vp.sigma2 = pc.params.z;
   vp.kappa = pc.params.w;
   vp.nm_scale = pc.params2.x;
+  vp.curvature_scale = pc.params2.y;
+  vp.curvature_bias = pc.params2.z;
+  vp.curvature_exponent = pc.params2.w;
 
   if (SPP_N == 1) {
     // Pixels past the image edge still run: they are the quad's helper lanes.
@@ -263,10 +266,12 @@ void main() {
     // A normal-map filter reads the map with the pixel's uv footprint and
     // differences the normals it filtered (renderPixelOracle in pixel.glsl).
     NormalMapFilter nf = levelZeroFilter();
+    FilteredCentre fc;
     if (DERIV_MODE == DERIV_ANALYTIC) {
       if (NM_FILTER != NMF_NONE) {
         nf = analyticNormalMapFilter(NM_FILTER, s, ray);
-        s = filteredSample(s, c.pos, light, nf);
+        fc = filteredCentre(s, c.pos, light, nf, m.alpha, vp.nm_scale);
+        s = fc.s;
       }
       f = analyticFootprintFiltered(s, ray, light, nf);
     } else if (DERIV_MODE == DERIV_QUAD_FINE) {
@@ -276,7 +281,8 @@ void main() {
       SurfaceSample v = quadNeighbour(s, swapVertical(s), c, light, px + ivec2(0, bottom ? -1 : 1));
       if (NM_FILTER != NMF_NONE) {
         nf = quadNormalMapFilter(NM_FILTER, s, right ? h : s, right ? s : h, bottom ? v : s, bottom ? s : v);
-        s = filteredSample(s, c.pos, light, nf);
+        fc = filteredCentre(s, c.pos, light, nf, m.alpha, vp.nm_scale);
+        s = fc.s;
         h = filteredSample(h, c.pos, light, nf);
         v = filteredSample(v, c.pos, light, nf);
       }
@@ -288,7 +294,8 @@ void main() {
       SurfaceSample s2 = quadNeighbour(s, broadcastLane(s, 2u), c, light, q + ivec2(0, 1));
       if (NM_FILTER != NMF_NONE) {
         nf = quadNormalMapFilter(NM_FILTER, s, s0, s1, s0, s2);
-        s = filteredSample(s, c.pos, light, nf);
+        fc = filteredCentre(s, c.pos, light, nf, m.alpha, vp.nm_scale);
+        s = fc.s;
         s0 = filteredSample(s0, c.pos, light, nf);
         s1 = filteredSample(s1, c.pos, light, nf);
         s2 = filteredSample(s2, c.pos, light, nf);
@@ -296,10 +303,9 @@ void main() {
       f = quadFootprint(s, s0, s1, s0, s2);
     }
     if (NM_FILTER != NMF_NONE) {
-      NormalMapLobe lobe = normalMapLobeAt(s, nf, m.alpha, vp.nm_scale);
-      m.alpha = lobe.alpha;
-      s = turnedSample(s, lobe.angle);
-      f = turnedFootprint(f, lobe.angle);
+      m.alpha = fc.lobe.alpha;
+      s = turnedSample(s, fc.lobe.angle);
+      f = turnedFootprint(f, fc.lobe.angle);
     }
     FilteredNdf ndf = runVariant(m.ndf, m.alpha, f, vp);
     PixelShade sh = shadeSample(s, f, ndf, m, light, VARIANT_ID, vp, QUADRATURE);

@@ -90,15 +90,15 @@ SurfaceSample missedSample() {
 }
 
 // Surface attributes of primitive `prim` at point p (p may lie off the
-// surface when a neighbour's ray is continued on this primitive), its normal
-// map read through filter nf.
-SurfaceSample surfaceOfPrimFiltered(Prim pr, int prim, vec3 p, vec3 eye, Light light, NormalMapFilter nf) {
+// surface when a neighbour's ray is continued on this primitive) with
+// shading normal n.
+SurfaceSample surfaceWithNormal(Prim pr, int prim, vec3 p, vec3 eye, Light light, vec3 n) {
   SurfaceSample s;
   s.prim = prim;
   s.p = p;
   s.t = length(eye - p);
   s.ng = geometricNormalAt(pr, p);
-  s.n = shadingNormalFiltered(pr, p, nf);
+  s.n = n;
   s.uv = vec2(real(0), real(0));
   s.uPeriod = real(0);
   if (isMapped(pr)) {
@@ -116,6 +116,11 @@ SurfaceSample surfaceOfPrimFiltered(Prim pr, int prim, vec3 p, vec3 eye, Light l
   return s;
 }
 
+// The same with the normal map read through filter nf.
+SurfaceSample surfaceOfPrimFiltered(Prim pr, int prim, vec3 p, vec3 eye, Light light, NormalMapFilter nf) {
+  return surfaceWithNormal(pr, prim, p, eye, light, shadingNormalFiltered(pr, p, nf));
+}
+
 SurfaceSample surfaceOfPrim(Prim pr, int prim, vec3 p, vec3 eye, Light light) {
   return surfaceOfPrimFiltered(pr, prim, p, eye, light, levelZeroFilter());
 }
@@ -129,6 +134,27 @@ SurfaceSample surfaceAt(int prim, vec3 p, vec3 eye, Light light) {
 SurfaceSample filteredSample(SurfaceSample s, vec3 eye, Light light, NormalMapFilter nf) {
   if (s.prim < 0) return s;
   return surfaceOfPrimFiltered(loadPrim(s.prim), s.prim, s.p, eye, light, nf);
+}
+
+// The pixel's own sample seen through nf, with the lobe the filter widens
+// the material's alpha to there (normalMapLobe), from one read of the map.
+struct FilteredCentre {
+  SurfaceSample s;
+  NormalMapLobe lobe;
+};
+
+FilteredCentre filteredCentre(SurfaceSample s, vec3 eye, Light light, NormalMapFilter nf, vec2 alpha, real scale) {
+  FilteredCentre o;
+  o.s = s;  // an unmapped primitive's sample is the same through any filter
+  o.lobe.alpha = alpha;
+  o.lobe.angle = real(0);
+  if (s.prim < 0) return o;
+  Prim pr = loadPrim(s.prim);
+  if (!isMapped(pr)) return o;
+  NormalMapStats st = normalMapStats(pr.map, nf, surfaceUv(pr, s.p));
+  o.s = surfaceWithNormal(pr, s.prim, s.p, eye, light, mappedNormal(pr, s.p, normalMapNormal(nf.mode, st)));
+  o.lobe = normalMapLobe(nf.mode, st, alpha, scale);
+  return o;
 }
 
 SurfaceSample surfaceOfHit(Hit hit, Ray r, Light light) {
@@ -338,18 +364,6 @@ PixelShade shadeSample(SurfaceSample s, ShadingFootprint f, FilteredNdf ndf, Mat
   return o;
 }
 
-// The lobe (roughness and the turn of its axes) a normal-map filter widens
-// the material to at sample s.
-NormalMapLobe normalMapLobeAt(SurfaceSample s, NormalMapFilter nf, vec2 alpha, real scale) {
-  NormalMapLobe l;
-  l.alpha = alpha;
-  l.angle = real(0);
-  if (s.prim < 0) return l;
-  Prim pr = loadPrim(s.prim);
-  if (!isMapped(pr)) return l;
-  return normalMapLobe(nf.mode, normalMapStats(pr.map, nf, s.uv), alpha, scale);
-}
-
 // A slope-space vector of the tangent frame in the frame turned by `angle`.
 vec2 turnedSlope(vec2 v, real c, real s) { return vec2(c * v.x + s * v.y, c * v.y - s * v.x); }
 
@@ -400,12 +414,14 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
   PixelResult r;
   int nmf = normalMapFilterOf(variant);
   NormalMapFilter nf = levelZeroFilter();
+  FilteredCentre fc;
   Ray ray = cameraRay(c, pixelCentre(px));
   r.s = traceRay(ray, light);
   if (r.s.prim < 0 || derivMode == DERIV_ANALYTIC) {
     if (nmf != NMF_NONE) {
       nf = analyticNormalMapFilter(nmf, r.s, ray);
-      r.s = filteredSample(r.s, c.pos, light, nf);
+      fc = filteredCentre(r.s, c.pos, light, nf, m.alpha, vp.nm_scale);
+      r.s = fc.s;
     }
     r.f = analyticFootprintFiltered(r.s, ray, light, nf);
   } else {
@@ -428,7 +444,8 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
       // The texture fetch takes its footprint from the quad's uv; the
       // normal's differences are then those of the filtered normals.
       nf = quadNormalMapFilter(nmf, r.s, x0, x1, y0, y1);
-      r.s = filteredSample(r.s, c.pos, light, nf);
+      fc = filteredCentre(r.s, c.pos, light, nf, m.alpha, vp.nm_scale);
+      r.s = fc.s;
       x0 = filteredSample(x0, c.pos, light, nf);
       x1 = filteredSample(x1, c.pos, light, nf);
       y0 = filteredSample(y0, c.pos, light, nf);
@@ -437,10 +454,9 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
     r.f = quadFootprint(r.s, x0, x1, y0, y1);
   }
   if (nmf != NMF_NONE) {
-    NormalMapLobe lobe = normalMapLobeAt(r.s, nf, m.alpha, vp.nm_scale);
-    m.alpha = lobe.alpha;
-    r.s = turnedSample(r.s, lobe.angle);
-    r.f = turnedFootprint(r.f, lobe.angle);
+    m.alpha = fc.lobe.alpha;
+    r.s = turnedSample(r.s, fc.lobe.angle);
+    r.f = turnedFootprint(r.f, fc.lobe.angle);
   }
   r.ndf = evalVariant(variant, m.ndf, m.alpha, r.f, vp);
   r.shade = shadeSample(r.s, r.f, r.ndf, m, light, variant, vp, vec4(real(-1), real(0), real(0), real(0)));

@@ -541,20 +541,20 @@ UvGradient surfaceUvGradient(Prim p, vec3 q) {
   return g;
 }
 
+// A tangent-space normal tn of mapped primitive p at q, in world space.
+vec3 mappedNormal(Prim p, vec3 q, vec3 tn) {
+  GeometricFrame f = geometricFrame(p, q);
+  return safeNormalize(f.t * tn.x + f.b * tn.y + f.n * tn.z, f.n);
+}
+
 // The shading normal at q: the primitive's own (bump pattern or geometric)
 // or its normal map read by filter nf.
 vec3 shadingNormalFiltered(Prim p, vec3 q, NormalMapFilter nf) {
-  if (isMapped(p)) {
-    GeometricFrame f = geometricFrame(p, q);
-    vec3 tn = normalMapNormal(nf.mode, normalMapStats(p.map, nf, surfaceUv(p, q)));
-    return safeNormalize(f.t * tn.x + f.b * tn.y + f.n * tn.z, f.n);
-  }
+  if (isMapped(p)) return mappedNormal(p, q, normalMapNormal(nf.mode, normalMapStats(p.map, nf, surfaceUv(p, q))));
   if (!isBumpy(p)) return geometricNormalAt(p, q);
   vec2 g = bumpGradient(p, q);
   return normalize(vec3(-g.x, real(1), -g.y));
 }
-
-vec3 shadingNormalAt(Prim p, vec3 q) { return shadingNormalFiltered(p, q, levelZeroFilter()); }
 
 // d(shading normal) for a move dq on the surface. A mapped normal is a
 // texture, not a closed form: its change is the central difference over the

@@ -112,6 +112,9 @@ FilteredNdf<T> EvaluateVariant(int id, Ndf ndf, glm::vec<2, T> alpha, const Foot
   p.sigma2 = params.sigma2;
   p.kappa = params.kappa;
   p.nm_scale = params.nm_scale;
+  p.curvature_scale = params.curvature_scale;
+  p.curvature_bias = params.curvature_bias;
+  p.curvature_exponent = params.curvature_exponent;
   auto r = Glsl<T>::Eval(id, static_cast<int>(ndf), alpha, f, p);
   return {r.slope_density, r.density, r.alpha_eff};
 }
@@ -244,6 +247,9 @@ auto FlatSgPoint(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3,
   p.vp.sigma2 = 0;
   p.vp.kappa = 0;
   p.vp.nm_scale = 1;
+  p.vp.curvature_scale = 1;
+  p.vp.curvature_bias = 0;
+  p.vp.curvature_exponent = T(0.333);
   return p;
 }
 }  // namespace
@@ -421,6 +427,9 @@ PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc&
   p.sigma2 = params.sigma2;
   p.kappa = params.kappa;
   p.nm_scale = params.nm_scale;
+  p.curvature_scale = params.curvature_scale;
+  p.curvature_bias = params.curvature_bias;
+  p.curvature_exponent = params.curvature_exponent;
   PixelResult r = renderPixelOracle(c, l, m, variant, static_cast<int>(derivatives), p, px);
   g_scene_words = {};
   PixelOracle o;

@@ -96,8 +96,8 @@ Result<UserParam> ParseParamLine(std::string_view rest) {
   return p;
 }
 
-// Binds each declared parameter to a VariantParams slot: one of the five
-// names keeps its own slot (so p.sigma2 means what it says on the GPU side
+// Binds each declared parameter to a VariantParams slot: one of the eight
+// built-in names keeps its own slot (so p.sigma2 means what it says on the GPU side
 // too), the others take the free slots in order.
 void BindSlots(std::vector<UserParam>* params) {
   std::set<const ParamField*> used;
@@ -113,7 +113,7 @@ void BindSlots(std::vector<UserParam>* params) {
   }
 }
 
-// The five built-in parameters, as a file without declarations reads them.
+// The eight built-in parameters, as a file without declarations reads them.
 std::vector<UserParam> BuiltInParams() {
   std::vector<UserParam> params;
   for (const ParamField& f : ParamFields()) {
@@ -159,7 +159,7 @@ Result<UserVariant> ParseUserVariant(std::string text, const std::string& file) 
       if (FindUserParam(v, p->name)) return R::Failure(at + "parameter " + p->name + " is declared twice");
       if (int(v.params.size()) == kMaxUserParams)
         return R::Failure(at + "more than " + std::to_string(kMaxUserParams) +
-                          " parameters: the renderer carries four per variant");
+                          " parameters: the renderer carries " + std::to_string(kMaxUserParams) + " per variant");
       p->line = line_no;
       v.params.push_back(std::move(*p));
     }
@@ -246,7 +246,7 @@ std::string UserParamsGlsl(const UserVariant& v) {
 std::string DescribeUserVariant(const UserVariant& v) {
   std::ostringstream s;
   s << v.file << ": " << (v.summary.empty() ? "a user variant (no shimmer-variant line)" : v.summary) << "\n";
-  if (!v.declared) s << "  no shimmer-param lines: it may read the five built-in parameters\n";
+  if (!v.declared) s << "  no shimmer-param lines: it may read the eight built-in parameters\n";
   if (v.params.empty()) s << "  parameters: none\n";
   for (const UserParam& p : v.params)
     s << "  " << p.name << " = " << NumberText(p.default_value) << " in [" << NumberText(p.lo) << ", "

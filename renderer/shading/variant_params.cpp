@@ -1,4 +1,5 @@
-// The variant parameters (fp_max, fp_min_cap, sigma2, kappa, nm_scale): their one
+// The variant parameters (fp_max, fp_min_cap, sigma2, kappa, nm_scale and the
+// three curvature constants): their one
 // table, validation, and the resolution of defaults and overrides.
 #include <cmath>
 #include <cstdio>
@@ -24,6 +25,12 @@ constexpr ParamField kParamFields[] = {
     {"kappa", &Params<double>::kappa, 0, 1e4, "clamp on the kernel roughness"},
     {"nm_scale", &Params<double>::nm_scale, 0, 100,
      "scale on the roughness variance a normal-map filter adds (widened alpha^2 is capped at 1)"},
+    // pow(curvature, E) with E > 0 keeps a flat surface's 0 at 0; the result
+    // is saturated, so scales and biases beyond these change nothing.
+    {"curvature_scale", &Params<double>::curvature_scale, 0, 1e4, "scale S on pow(curvature, E)"},
+    {"curvature_bias", &Params<double>::curvature_bias, -1, 1, "bias B added to S pow(curvature, E)"},
+    {"curvature_exponent", &Params<double>::curvature_exponent, 0.0625, 10,
+     "exponent E on the curvature max(|dn/dx|^2, |dn/dy|^2)"},
 };
 
 }  // namespace

@@ -22,9 +22,13 @@ std::vector<VariantInfo> BuildCatalogue() {
       {"none", 0, "point-sampled NDF, no filtering", "baseline", {}, false, false},
       {"vlachos15",
        1,
-       "perceptual roughness clamped from below by pow(sat(max(|dn/dx|^2, |dn/dy|^2)), 0.333) of the geometric normal",
-       "Vlachos, Advanced VR Rendering, GDC 2015 (cited in seed 000); Valve's The Lab renderer",
-       {},
+       "perceptual roughness clamped from below by sat(S pow(max(|dn/dx|^2, |dn/dy|^2), E) + B) of the geometric "
+       "normal; Vlachos' constants S = 1, B = 0, E = 0.333",
+       "Vlachos, Advanced VR Rendering, GDC 2015 (cited in seed 000); Valve's The Lab renderer; the constants as "
+       "Unreal's Normal Curvature to Roughness exposes them",
+       {{"curvature_scale", 1.0, "S: scale on the curvature term (Unreal: Normal Curvature to Roughness scale)"},
+        {"curvature_bias", 0.0, "B: bias added after the scale"},
+        {"curvature_exponent", 0.333, "E: exponent on max(|dn/dx|^2, |dn/dy|^2)"}},
        true,
        false},
       {"toksvig-quad",

@@ -58,6 +58,9 @@ struct VariantParams {
   real sigma2;      // screen-space variance of the filtering kernel
   real kappa;       // clamp on the kernel roughness
   real nm_scale;    // normal-map filters: scale on the variance they add (pixel.glsl)
+  real curvature_scale;     // vlachos15: Unreal's NormalCurvatureToRoughness scale,
+  real curvature_bias;      // bias
+  real curvature_exponent;  // and exponent
 };
 
 struct FilteredNdf {
@@ -136,9 +139,14 @@ FilteredNdf k16Parallelogram(int ndf, vec2 alpha, ShadingFootprint f) {
 
 // Vlachos, "Advanced VR Rendering" (GDC 2015), as cited in seed 000 and as in
 // Valve's The Lab renderer: perceptual roughness r = sqrt(alpha) is clamped
-// from below by pow(sat(max(|dn/dx|^2, |dn/dy|^2)), 0.333) of the geometric normal.
-vec2 vlachosAlpha2(vec2 alpha, ShadingFootprint f) {
-  real k = pow(sat(max(dot(f.dng_dx, f.dng_dx), dot(f.dng_dy, f.dng_dy))), real(0.333));
+// from below by pow(sat(max(|dn/dx|^2, |dn/dy|^2)), 0.333) of the geometric
+// normal. Unreal's "normal curvature to roughness" exposes the constants:
+// sat(S pow(max(...), E) + B), which is Vlachos' at S = 1, B = 0, E = 0.333.
+vec2 vlachosAlpha2(vec2 alpha, ShadingFootprint f, VariantParams p) {
+  real c = max(dot(f.dng_dx, f.dng_dx), dot(f.dng_dy, f.dng_dy));
+  // Bounded so that S = 0 times an overflowed power stays 0, not NaN.
+  real t = min(pow(min(c, real(1e30)), p.curvature_exponent), real(1e30));
+  real k = sat(p.curvature_scale * t + p.curvature_bias);
   vec2 r = max(sqrt(alpha), vec2(k, k));
   vec2 a = r * r;
   return a * a;
@@ -220,7 +228,7 @@ FilteredNdf evalVariant(int variant, int ndf, vec2 alpha, ShadingFootprint f, Va
   f.dhpp_dx = clamp(f.dhpp_dx, -lim, lim);
   f.dhpp_dy = clamp(f.dhpp_dy, -lim, lim);
   vec2 hpp = clampSlope(f.hpp);
-  if (variant == VARIANT_VLACHOS15) return widenedNdf(ndf, hpp, vlachosAlpha2(alpha, f));
+  if (variant == VARIANT_VLACHOS15) return widenedNdf(ndf, hpp, vlachosAlpha2(alpha, f, p));
   if (variant == VARIANT_TOKSVIG_QUAD) return widenedNdf(ndf, hpp, toksvigAlpha2(alpha, f));
   if (variant == VARIANT_K16_BECKMANN_RECT || variant == VARIANT_K16_GGX_PROXY)
     return widenedNdf(ndf, hpp, k16RectAlpha2(alpha, f, p.fp_max));

@@ -232,7 +232,7 @@ TEST(Spec, BadFitConfigurationsAreRejectedUpFront) {
       << e;
   e = error(ggx, R"({"variants": ["tk19"], "param": "fp_max", )" + kShots + "}");
   EXPECT_NE(e.find("tk19: has no parameter \"fp_max\""), std::string::npos) << e;
-  e = error(ggx, R"({"variants": ["vlachos15"], "param": "fp_max", )" + kShots + "}");
+  e = error(ggx, R"({"variants": ["toksvig-quad"], "param": "fp_max", )" + kShots + "}");
   EXPECT_NE(e.find("(its parameters: none)"), std::string::npos) << e;
   e = error(R"(["beckmann:0.1"])", R"({"variants": ["k16-ggx-rect-stable"], "param": "fp_max", )" + kShots + "}");
   EXPECT_NE(e.find("takes GGX materials only"), std::string::npos) << e;

@@ -26,8 +26,9 @@ TEST(ParamFields, NameTheFiveParametersOfVariantParams) {
     EXPECT_TRUE(std::isfinite(r.lo) && std::isfinite(r.hi) && r.lo < r.hi) << r.name;
     EXPECT_FALSE(r.meaning.empty()) << r.name;
   }
-  EXPECT_EQ(names, (std::vector<std::string>{"fp_max", "fp_min_cap", "sigma2", "kappa", "nm_scale"}));
-  EXPECT_EQ(members.size(), 5u);
+  EXPECT_EQ(names, (std::vector<std::string>{"fp_max", "fp_min_cap", "sigma2", "kappa", "nm_scale", "curvature_scale",
+                                              "curvature_bias", "curvature_exponent"}));
+  EXPECT_EQ(members.size(), 8u);
   EXPECT_EQ(FindParamField("alpha"), nullptr);
   // Each name reaches its own field.
   Params<double> p{1, 2, 3, 4};
@@ -52,7 +53,7 @@ TEST(ValidateParam, AcceptsTheClosedRangeAndRejectsEverythingElse) {
     EXPECT_TRUE(ValidateParam(r.name, 0.5 * (r.lo + r.hi)).ok()) << r.name;
     EXPECT_EQ(ValidateParam(r.name, r.lo).ok(), true) << r.name;
     EXPECT_TRUE(ValidateParam(r.name, std::nextafter(r.lo, kInf)).ok()) << r.name;
-    for (double bad : {std::nextafter(r.lo, -kInf), std::nextafter(r.hi, kInf), -1.0, kInf, -kInf,
+    for (double bad : {std::nextafter(r.lo, -kInf), std::nextafter(r.hi, kInf), r.lo - 1, kInf, -kInf,
                        std::numeric_limits<double>::quiet_NaN(), 1e300})
       EXPECT_FALSE(ValidateParam(r.name, bad).ok()) << r.name << " " << bad;
   }
@@ -64,9 +65,11 @@ TEST(ValidateParam, MessageNamesTheParameterTheRangeAndTheValue) {
   EXPECT_EQ(ValidateParam("fp_max", -0.25).error(), "parameter fp_max must be >= 0 and <= 10000, got -0.25");
   EXPECT_EQ(ValidateParam("fp_min_cap", 1e39).error(), "parameter fp_min_cap must be >= 0 and <= 100, got 1e+39");
   EXPECT_EQ(ValidateParam("alpha", 1).error(),
-            "unknown parameter 'alpha' (the parameters are fp_max, fp_min_cap, sigma2, kappa, nm_scale)");
+            "unknown parameter 'alpha' (the parameters are fp_max, fp_min_cap, sigma2, kappa, nm_scale, "
+            "curvature_scale, curvature_bias, curvature_exponent)");
+  EXPECT_EQ(ValidateParam("curvature_bias", -1.5).error(), "parameter curvature_bias must be >= -1 and <= 1, got -1.5");
   for (const ParamField& r : ParamFields()) {
-    const std::string m = ValidateParam(r.name, -1).error();
+    const std::string m = ValidateParam(r.name, r.lo - 1).error();
     EXPECT_EQ(m.find("0.000000"), std::string::npos) << m;
     EXPECT_NE(m.find(">= "), std::string::npos) << m;
   }

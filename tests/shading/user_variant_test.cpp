@@ -51,12 +51,12 @@ TEST(UserVariant, DeclarationsGiveNamesDefaultsRangesAndSlots) {
   EXPECT_NE(edited->content_hash, v->content_hash);
 }
 
-TEST(UserVariant, WithoutDeclarationsTheFiveBuiltInParametersAreImplied) {
+TEST(UserVariant, WithoutDeclarationsTheBuiltInParametersAreImplied) {
   auto v = ParseUserVariant("FilteredNdf userVariant(...) {}\n", "old.glsl");
   ASSERT_TRUE(v.ok());
   EXPECT_FALSE(v->declared);
-  ASSERT_EQ(v->params.size(), 5u);
-  for (std::size_t i = 0; i < 4; ++i) {
+  ASSERT_EQ(v->params.size(), ParamFields().size());
+  for (std::size_t i = 0; i < ParamFields().size(); ++i) {
     EXPECT_EQ(v->params[i].name, ParamFields()[i].name);
     EXPECT_EQ(v->params[i].slot, &ParamFields()[i]);
     EXPECT_EQ(v->params[i].default_value, Params<double>{}.*(ParamFields()[i].member));
@@ -84,8 +84,9 @@ TEST(UserVariant, BadDeclarationsNameTheFileAndLine) {
       {"// shimmer-params: some", "expected 'shimmer-params: none'"},
       {"// shimmer-variant: a\n// shimmer-variant: b", "a second shimmer-variant line"},
       {"// shimmer-param: a = 0 in [0, 1]\n// shimmer-param: b = 0 in [0, 1]\n// shimmer-param: c = 0 in [0, 1]\n"
-       "// shimmer-param: d = 0 in [0, 1]\n// shimmer-param: e = 0 in [0, 1]",
-       "more than 4 parameters"},
+       "// shimmer-param: d = 0 in [0, 1]\n// shimmer-param: e = 0 in [0, 1]\n// shimmer-param: f = 0 in [0, 1]\n"
+       "// shimmer-param: g = 0 in [0, 1]\n// shimmer-param: h = 0 in [0, 1]\n// shimmer-param: i = 0 in [0, 1]",
+       "more than 8 parameters"},
   };
   for (const auto& [text, problem] : cases) {
     auto v = ParseUserVariant("// my filter\n" + text + "\n", "bad.glsl");

@@ -113,11 +113,14 @@ struct Pools {
     for (std::size_t i = 0, n = value.size(); i < n; ++i) value.push_back(-value[i]);
     normal = NormalPool<T>(rng, 1 << 12);
     for (const ParamField& r : ParamFields()) {
-      std::vector<double> specials = {r.hi};
+      std::vector<double> specials = {r.lo, r.hi};
       for (const VariantInfo& v : Variants())
         for (const ParamInfo& p : v.params)
           if (p.name == r.name) specials.push_back(p.default_value);
       std::vector<T> pool = MagnitudePool<T>(rng, 1 << 12, r.hi, specials);
+      // A range reaching below zero (a bias) draws negative values as often.
+      if (r.lo < 0)
+        for (std::size_t i = 0, n = pool.size(); i < n; ++i) pool.push_back(-pool[i]);
       // Pools keep a power-of-two size (picks are masks, not divisions).
       std::vector<T> valid;
       for (T x : pool)

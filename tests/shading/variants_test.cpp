@@ -298,6 +298,32 @@ TEST(Variants, WideningFormulas) {
   EXPECT_LE(alpha_of("toksvig-quad").x, 1.0);
 }
 
+// vlachos15 with Unreal's knobs: r_min = sat(S pow(curvature, E) + B), here
+// with curvature max(0.2^2, 0.1^2) = 0.04; the defaults are Vlachos' formula.
+TEST(Variants, CurvatureToRoughnessKnobs) {
+  Footprint<double> f;
+  f.dng_dx = {0.2, 0, 0};
+  f.dng_dy = {0, 0.1, 0};
+  const VariantInfo* v = FindVariant("vlachos15");
+  const double a = 0.01;  // sqrt(a) = 0.1: below every clamp here
+  auto alpha_with = [&](double s, double b, double e) {
+    Params<double> p = DefaultParams<double>(*v);
+    p.curvature_scale = s, p.curvature_bias = b, p.curvature_exponent = e;
+    return EvaluateVariant<double>(v->id, Ndf::kGgx, {a, a}, f, p).alpha_eff.x;
+  };
+  auto squared2 = [](double r) { return r * r; };
+  EXPECT_NEAR(alpha_with(1, 0, 0.333), squared2(std::pow(0.04, 0.333)), 1e-12);
+  EXPECT_NEAR(alpha_with(2, 0, 0.5), squared2(2 * 0.2), 1e-12);
+  EXPECT_NEAR(alpha_with(1, 0.3, 0.5), squared2(0.2 + 0.3), 1e-12);
+  EXPECT_NEAR(alpha_with(1, -0.15, 0.5), squared2(std::max(0.05, std::sqrt(a))), 1e-12);  // r = 0.05 < sqrt(a)
+  EXPECT_NEAR(alpha_with(100, 0, 0.5), 1.0, 1e-12);  // saturated at r = 1
+  EXPECT_NEAR(alpha_with(0, 0, 10), a, 1e-12);        // no clamp: the material's alpha
+  // A flat surface: the bias alone clamps.
+  f.dng_dx = f.dng_dy = glm::dvec3(0);
+  EXPECT_NEAR(alpha_with(1, 0.5, 0.333), squared2(0.5), 1e-12);
+  EXPECT_NEAR(alpha_with(1, 0, 0.333), a, 1e-12);
+}
+
 TEST(Variants, K16GgxRectMatchesQuadratureOfItsClampedRect) {
   const VariantInfo* v = FindVariant("k16-ggx-rect");
   const double a = 0.02;

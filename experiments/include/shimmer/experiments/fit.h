@@ -27,6 +27,32 @@ struct Fit1D {
 Fit1D Minimize1D(const std::function<double(double)>& objective, double lo, double hi, int sweep_points,
                  const std::vector<double>& extra_points = {});
 
+// One parameter of a joint fit: its bounds, searched on log p when lo > 0
+// (scales: fp_max, sigma2) and on p itself otherwise (biases).
+struct FitAxis {
+  double lo = 0, hi = 1;
+  bool Logarithmic() const { return lo > 0; }
+};
+
+struct FitND {
+  std::vector<double> best;     // a value per axis
+  double objective = 0;         // J(best)
+  int evaluations = 0;          // calls of J, grid included
+  bool ceres_improved = false;  // false when the grid's best point stood
+  std::vector<std::pair<std::vector<double>, double>> samples;  // (p, J(p)) of every evaluation
+};
+
+// Minimises J over the box of `axes` jointly: a grid of `grid_points` per
+// axis (log-spaced on logarithmic axes) plus `extra_points` inside the box,
+// then Ceres inside the grid cell around the best point (one tick either way
+// per axis), solving g(u) = 0 for the central-difference gradient g with the
+// difference Hessian as its Jacobian, at a fixed step (0.1 in log p, 5 % of
+// the range on linear axes) wide against a rendered J's aliasing noise. The
+// lowest J evaluated wins, so the result is never worse than any grid point;
+// each distinct point is evaluated once.
+FitND MinimizeND(const std::function<double(const std::vector<double>&)>& objective, const std::vector<FitAxis>& axes,
+                 int grid_points, const std::vector<std::vector<double>>& extra_points = {});
+
 // fp(alpha) = a * alpha^b by Ceres on log fp with a Cauchy loss (scale 0.2 in
 // log units), so one odd material cannot drag the curve.
 struct PowerLaw {

@@ -44,6 +44,10 @@ struct Params {
   T sigma2 = T(0.25);
   T kappa = T(0.18);
   T nm_scale = 1;  // normal-map filters: scale on the variance they add
+  // vlachos15 as Unreal exposes it: sat(S pow(curvature, E) + B).
+  T curvature_scale = 1;
+  T curvature_bias = 0;
+  T curvature_exponent = T(0.333);
 };
 
 template <class T>
@@ -220,7 +224,7 @@ bool NeedsSgLight(const VariantInfo& info);
 // unfiltered SG warps do not: one derivative source is enough for them).
 bool ReadsFootprint(const VariantInfo& info);
 
-// The four variant parameters, named once: what a variant may read, and the
+// The variant parameters, named once: what a variant may read, and the
 // values it accepts.
 struct ParamField {
   std::string_view name;
@@ -230,7 +234,7 @@ struct ParamField {
 };
 std::span<const ParamField> ParamFields();
 const ParamField* FindParamField(std::string_view name);
-// The value of the parameter called `name` (fp_max, fp_min_cap, sigma2, kappa).
+// The value of the parameter called `name` (ParamFields()).
 double ParamValue(const Params<double>& params, std::string_view name);
 // Empty Status when `value` is accepted for `name`; else the error names the
 // parameter, the value and the accepted range.

@@ -5,10 +5,10 @@
 //   // shimmer-param: k = 0.5 in [0, 4]: what k means
 //   // shimmer-params: none            (a variant that reads no parameter)
 //
-// A file without shimmer-param lines reads the five built-in parameters
+// A file without shimmer-param lines reads the eight built-in parameters
 // (fp_max, fp_min_cap, sigma2, kappa) with their defaults and ranges. The
 // GLSL reads a parameter as `p.k` from `UserParams p`; the renderer carries
-// at most four, in the slots of VariantParams (docs/variants.md).
+// at most eight, in the slots of VariantParams (docs/variants.md).
 #pragma once
 
 #include <memory>
@@ -22,7 +22,7 @@
 
 namespace shimmer::shading {
 
-inline constexpr int kMaxUserParams = 4;  // the slots of VariantParams
+inline constexpr int kMaxUserParams = 8;  // the slots of VariantParams
 
 struct UserParam {
   std::string name;
@@ -43,7 +43,7 @@ struct UserVariant {
   std::string text;
   std::string summary;              // the shimmer-variant line, or ""
   std::vector<UserParam> params;    // in declaration order
-  bool declared = false;            // false: the five built-in parameters are implied
+  bool declared = false;            // false: the eight built-in parameters are implied
   std::string content_hash;         // Fnv1a64Hex of the text: what job ids hash
 };
 

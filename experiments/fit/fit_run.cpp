@@ -1,12 +1,16 @@
 #include "shimmer/experiments/fit_run.h"
 
 #include <cmath>
+#include <cstdio>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "shimmer/experiments/output_files.h"
 #include "shimmer/experiments/result_store.h"
 #include "shimmer/renderer/scene.h"
+#include "shimmer/renderer/shading.h"
+#include "shimmer/renderer/user_variant.h"
 
 namespace shimmer::experiments {
 
@@ -69,6 +73,14 @@ class CachedMeasure {
   int rendered_ = 0;
 };
 
+// Half the width of a metric's 95 % interval (0 when the row has none).
+double HalfWidth(const nlohmann::json& metrics, const char* key) {
+  if (!metrics.contains("ci95") || !metrics["ci95"].contains(key)) return 0;
+  const nlohmann::json& ci = metrics["ci95"][key];
+  if (!ci.is_array() || ci.size() != 2 || !ci[0].is_number() || !ci[1].is_number()) return 0;
+  return 0.5 * (ci[1].get<double>() - ci[0].get<double>());
+}
+
 struct Objective {
   const Spec& spec;
   const FitConfig& config;
@@ -79,13 +91,15 @@ struct Objective {
   std::set<std::string>* used;  // ids of every job this fit consulted
 
   // NaN when a render or measurement failed (measure.error() says why).
-  ObjectiveValue operator()(double p, const ShotSet& shots) const {
+  ObjectiveValue operator()(double p, const ShotSet& shots) const { return (*this)({{config.param, p}}, shots); }
+
+  ObjectiveValue operator()(const std::map<std::string, double>& params, const ShotSet& shots) const {
     ObjectiveValue value;
     for (const std::string& shot_scene : shots.scenes)
       for (const std::string& camera : shots.cameras) {
         const std::string scene = MappedScene(shot_scene, map);
         const Job none_job = SpecJob(spec, scene, material, camera, "none", {}, config.derivatives);
-        const Job test_job = SpecJob(spec, scene, material, camera, variant, {{config.param, p}}, config.derivatives);
+        const Job test_job = SpecJob(spec, scene, material, camera, variant, params, config.derivatives);
         const std::string none_id = JobId(none_job), test_id = JobId(test_job);
         used->insert(none_id);
         used->insert(test_id);
@@ -100,14 +114,38 @@ struct Objective {
         t.relmse = Metric(*test, "relmse");
         t.relmse_none = Metric(*none, "relmse");
         t.bias = Metric(*test, "energy_bias");
+        t.flicker_hw = HalfWidth(*test, "flicker_index");
+        t.relmse_hw = HalfWidth(*test, "relmse");
+        t.bias_hw = HalfWidth(*test, "energy_bias");
         t.j = ShotObjective(config.weights, t);
         value.shots.push_back(t);
         value.j += t.j;
       }
     value.j /= double(value.shots.size());
+    value.half_width = ObjectiveHalfWidth(config.weights, value.shots);
     return value;
   }
 };
+
+
+// A variant's own values of `names`: its catalogue defaults, or those its
+// user file declares (the spec checked that it has every one).
+std::vector<double> OwnSetting(const Spec& spec, const std::string& variant, const std::vector<std::string>& names) {
+  std::vector<double> values;
+  if (auto it = spec.user_variants.find(variant); it != spec.user_variants.end()) {
+    for (const std::string& n : names) values.push_back(shading::FindUserParam(*it->second, n)->default_value);
+    return values;
+  }
+  const shading::Params<double> p = shading::ResolveParams(*shading::FindVariant(variant), {}).value();
+  for (const std::string& n : names) values.push_back(shading::ParamValue(p, n));
+  return values;
+}
+
+std::map<std::string, double> Setting(const std::vector<std::string>& names, const std::vector<double>& values) {
+  std::map<std::string, double> m;
+  for (std::size_t i = 0; i < names.size(); ++i) m[names[i]] = values[i];
+  return m;
+}
 
 nlohmann::json ToJson(const ObjectiveValue& v) {
   nlohmann::json shots = nlohmann::json::array();
@@ -120,7 +158,7 @@ nlohmann::json ToJson(const ObjectiveValue& v) {
                      {"relmse_none", t.relmse_none},
                      {"energy_bias", t.bias},
                      {"j", t.j}});
-  return {{"j", v.j}, {"shots", shots}};
+  return {{"j", v.j}, {"j_ci95_half_width", v.half_width}, {"shots", shots}};
 }
 
 }  // namespace
@@ -128,6 +166,19 @@ nlohmann::json ToJson(const ObjectiveValue& v) {
 double ShotObjective(const FitWeights& w, const ShotTerms& t) {
   return w.flicker * Ratio(t.flicker, t.flicker_none) + w.spatial * Ratio(t.relmse, t.relmse_none) +
          w.bias * t.bias * t.bias;
+}
+
+double ObjectiveHalfWidth(const FitWeights& w, const std::vector<ShotTerms>& shots) {
+  if (shots.empty()) return 0;
+  double sum = 0;
+  for (const ShotTerms& t : shots) {
+    const double f = w.flicker * Ratio(t.flicker_hw, t.flicker_none);
+    const double e = w.spatial * Ratio(t.relmse_hw, t.relmse_none);
+    // d(b^2) = 2 |b| db, and at least db^2 where b is near 0.
+    const double b = w.bias * std::max(2 * std::abs(t.bias) * t.bias_hw, t.bias_hw * t.bias_hw);
+    sum += f * f + e * e + b * b;
+  }
+  return std::sqrt(sum) / double(shots.size());
 }
 
 nlohmann::json MaterialFit::ToJson() const {
@@ -156,6 +207,118 @@ nlohmann::json MaterialFit::ToJson() const {
   return j;
 }
 
+nlohmann::json JointFit::ToJson() const {
+  nlohmann::json samples = nlohmann::json::array();
+  for (const auto& [p, j] : search.samples) samples.push_back({p, j});
+  nlohmann::json bounds_json = nlohmann::json::array();
+  for (const FitAxis& a : bounds) bounds_json.push_back({a.lo, a.hi});
+  nlohmann::json folds_json = nlohmann::json::array();
+  for (const CrossFold& f : folds)
+    folds_json.push_back({{"scene", f.scene},
+                          {"leave_out", f.leave_out},
+                          {"values", f.values},
+                          {"held_out", experiments::ToJson(f.held_out)},
+                          {"held_out_defaults", experiments::ToJson(f.held_out_defaults)}});
+  return {{"variant", variant},
+          {"params", params},
+          {"material", material},
+          {"ndf", ndf},
+          {"alpha", alpha},
+          {"bounds", bounds_json},
+          {"values", search.best},
+          {"evaluations", search.evaluations},
+          {"ceres_improved", search.ceres_improved},
+          {"seconds", seconds},
+          {"samples", samples},
+          {"train", experiments::ToJson(train)},
+          {"validate", experiments::ToJson(validate)},
+          {"defaults", {{"values", defaults},
+                        {"train", experiments::ToJson(train_defaults)},
+                        {"validate", experiments::ToJson(validate_defaults)}}},
+          {"folds", folds_json}};
+}
+
+namespace {
+
+std::string SettingText(const std::vector<std::string>& names, const std::vector<double>& values) {
+  std::string text;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    text += (i ? "," : "") + names[i] + "=" + FormatNumber(values[i], "%.4g");
+  return text;
+}
+
+// One joint fit of `variant` on `material`, with its cross-validation folds.
+std::optional<Error> RunJointFit(const Spec& spec, const FitConfig& config, const std::string& variant,
+                                 const std::string& material, CachedMeasure& measure, ResultStore& store,
+                                 const std::function<void(const std::string&)>& log, FitOutcome* outcome) {
+  const shading::MaterialDesc desc = *scene::ParseMaterial(material, {});
+  std::set<std::string> used;
+  const std::string no_map;
+  Objective objective{spec, config, material, variant, no_map, measure, &used};
+  auto j_on = [&](const ShotSet& shots) {
+    return [&, shots](const std::vector<double>& p) { return objective(Setting(config.joint_params, p), shots).j; };
+  };
+  JointFit fit;
+  fit.variant = variant;
+  fit.material = material;
+  fit.ndf = std::string(shading::NdfName(desc.ndf));
+  fit.alpha = std::sqrt(desc.alpha.x * desc.alpha.y);
+  fit.params = config.joint_params;
+  fit.bounds = config.joint_bounds;
+  fit.defaults = OwnSetting(spec, variant, config.joint_params);
+  const int rendered_before = measure.rendered();
+  // The defaults are not offered to the search, as in one dimension.
+  fit.search = MinimizeND(j_on(config.train), config.joint_bounds, config.sweep_points);
+  const auto best = Setting(config.joint_params, fit.search.best), own = Setting(config.joint_params, fit.defaults);
+  fit.train = objective(best, config.train);
+  fit.validate = objective(best, config.validate);
+  fit.train_defaults = objective(own, config.train);
+  fit.validate_defaults = objective(own, config.validate);
+  if (config.cross_validate)
+    for (const std::string& scene : config.train.scenes) {
+      ShotSet rest{{}, config.train.cameras}, alone{{scene}, config.train.cameras};
+      for (const std::string& s : config.train.scenes)
+        if (s != scene) rest.scenes.push_back(s);
+      // Left out: fitted on the others, measured on it under the training cameras.
+      CrossFold out;
+      out.scene = scene;
+      out.values = MinimizeND(j_on(rest), config.joint_bounds, config.sweep_points).best;
+      out.held_out = objective(Setting(config.joint_params, out.values), alone);
+      out.held_out_defaults = objective(own, alone);
+      fit.folds.push_back(out);
+      // Alone: fitted on it, measured on it under the validation cameras.
+      CrossFold in;
+      in.scene = scene;
+      in.leave_out = false;
+      in.values = MinimizeND(j_on(alone), config.joint_bounds, config.sweep_points).best;
+      const ShotSet moved{{scene}, config.validate.cameras};
+      in.held_out = objective(Setting(config.joint_params, in.values), moved);
+      in.held_out_defaults = objective(own, moved);
+      fit.folds.push_back(in);
+    }
+  if (measure.error()) return Prefixed(variant + " on " + material, *measure.error());
+  for (const std::string& id : used) fit.seconds += measure.WallSeconds(id);
+  std::string names;
+  for (const std::string& n : config.joint_params) names += (names.empty() ? "" : ",") + n;
+  if (Status s = store.InsertFit(variant, names, material, "", std::nan(""), fit.train.j, fit.validate.j, fit.ToJson());
+      !s)
+    return s.failure();
+  if (log) {
+    char line[512];
+    std::snprintf(line, sizeof line,
+                  "%s %s on %s: J_train %.4g (own setting %.4g), J_validate %.4g (own %.4g) (%d evaluations, %d "
+                  "renders, %.0f s)",
+                  variant.c_str(), SettingText(fit.params, fit.search.best).c_str(), material.c_str(), fit.train.j,
+                  fit.train_defaults.j, fit.validate.j, fit.validate_defaults.j, fit.search.evaluations,
+                  measure.rendered() - rendered_before, fit.seconds);
+    log(line);
+  }
+  outcome->joint_fits.push_back(std::move(fit));
+  return std::nullopt;
+}
+
+}  // namespace
+
 FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::function<void(const std::string&)>& log,
                    const std::function<void(const std::string&)>& progress) {
   FitOutcome outcome;
@@ -177,6 +340,15 @@ FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::funct
   std::unique_ptr<ResultStore> store = std::move(*opened);
   CachedMeasure measure(store.get(), options, progress);
   for (const FitConfig& config : spec.fits) {
+    if (config.IsJoint()) {
+      for (const std::string& variant : config.variants)
+        for (const std::string& material : spec.materials)
+          if (auto e = RunJointFit(spec, config, variant, material, measure, *store, log, &outcome)) {
+            outcome.error = *e;
+            return outcome;
+          }
+      continue;
+    }
     const std::vector<std::string> maps = config.maps.empty() ? std::vector<std::string>{""} : config.maps;
     for (const std::string& variant : config.variants)
       for (const std::string& map : maps)

@@ -1,6 +1,7 @@
 #include "shimmer/experiments/fit_report.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <sstream>
@@ -25,17 +26,111 @@ std::string Shots(const ShotSet& s) { return "scenes " + Join(s.scenes) + " × c
 // A fit's row name: its material, and its normal map when the fit is per map.
 std::string Subject(const MaterialFit& f) { return f.map.empty() ? f.material : f.material + " with " + f.map; }
 
+// What to type into the engine a variant stands for: its knobs under the
+// engine's names and units (HDRP squares its threshold, so the knob is the
+// root of kappa). Other variants show their parameters as they are.
+struct Knob {
+  std::string param, name;
+  bool root = false;  // the engine's knob is sqrt(param)
+};
+std::pair<std::string, std::vector<Knob>> EngineKnobs(const std::string& variant) {
+  if (variant == "vlachos15")
+    return {"Unreal, normal curvature to roughness (Vlachos' clamp)",
+            {{"curvature_scale", "scale S"}, {"curvature_bias", "bias B"}, {"curvature_exponent", "exponent E"}}};
+  if (variant == "filament")
+    return {"Filament",
+            {{"sigma2", "specularAntiAliasingVariance"}, {"kappa", "specularAntiAliasingThreshold"}}};
+  if (variant == "unity-hdrp")
+    return {"Unity HDRP", {{"sigma2", "screen space variance"}, {"kappa", "threshold", true}}};
+  if (variant == "godot")
+    return {"Godot", {{"sigma2", "roughness_limiter_amount"}, {"kappa", "roughness_limiter_limit"}}};
+  return {variant, {}};
+}
+
+std::string KnobText(const std::string& variant, const std::vector<std::string>& params,
+                     const std::vector<double>& values) {
+  const auto knobs = EngineKnobs(variant).second;
+  std::string text;
+  for (std::size_t i = 0; i < params.size(); ++i) {
+    std::string name = params[i];
+    double v = values[i];
+    for (const Knob& k : knobs)
+      if (k.param == params[i]) name = k.name, v = k.root ? std::sqrt(std::max(v, 0.0)) : v;
+    text += (i ? ", " : "") + name + " = " + FormatNumber(v);
+  }
+  return text;
+}
+
+std::string WithInterval(const ObjectiveValue& v) {
+  return FormatNumber(v.j) + " ± " + FormatNumber(v.half_width, "%.2g");
+}
+
+// Whether a fitted setting's J beats the shipped one's beyond both intervals.
+std::string Verdict(const ObjectiveValue& fitted, const ObjectiveValue& shipped) {
+  if (fitted.j + fitted.half_width < shipped.j - shipped.half_width) return "fitted better";
+  if (shipped.j + shipped.half_width < fitted.j - fitted.half_width) return "shipped better";
+  return "within intervals";
+}
+
+std::string EngineSettingsMarkdown(const std::vector<JointFit>& fits) {
+  std::ostringstream md;
+  md << "## Engine settings\n\n"
+     << "Each engine's own knobs, fitted jointly per material on the training shots (the same J), beside the "
+        "setting the engine ships. ± is half the width of J's 95 % interval, to first order from the metrics' "
+        "intervals (the shots and terms taken as independent); a verdict needs the two intervals apart.\n\n";
+  std::map<std::string, std::vector<const JointFit*>> by_material;
+  for (const JointFit& f : fits) by_material[f.material].push_back(&f);
+  for (const auto& [material, list] : by_material) {
+    md << "### " << material << "\n\n"
+       << "| engine (variant) | fitted: the values to type in | shipped | J train, fitted (shipped) | "
+          "J validate, fitted (shipped) | held out |\n|---|---|---|---|---|---|\n";
+    for (const JointFit* f : list)
+      md << "| " << EngineKnobs(f->variant).first << " (`" << f->variant << "`) | "
+         << KnobText(f->variant, f->params, f->search.best) << " | " << KnobText(f->variant, f->params, f->defaults)
+         << " | " << WithInterval(f->train) << " (" << WithInterval(f->train_defaults) << ") | "
+         << WithInterval(f->validate) << " (" << WithInterval(f->validate_defaults) << ") | "
+         << Verdict(f->validate, f->validate_defaults) << " |\n";
+    md << "\n";
+  }
+  bool any_folds = false;
+  for (const JointFit& f : fits) any_folds |= !f.folds.empty();
+  if (!any_folds) return md.str();
+  md << "### Does a setting transfer?\n\n"
+        "Per training scene (a geometry class): **left out**, the setting fitted on the other training scenes, "
+        "measured on this one; **alone**, the setting fitted on this scene only, measured on it under the "
+        "validation cameras. Each beside the shipped setting on the same shots.\n\n"
+        "| variant | material | scene | left out: setting | J (shipped) | verdict | alone: setting | J (shipped) | "
+        "verdict |\n|---|---|---|---|---|---|---|---|---|\n";
+  for (const JointFit& f : fits)
+    for (std::size_t i = 0; i + 1 < f.folds.size(); i += 2) {
+      const CrossFold& out = f.folds[i];
+      const CrossFold& alone = f.folds[i + 1];
+      md << "| `" << f.variant << "` | " << f.material << " | " << out.scene << " | "
+         << KnobText(f.variant, f.params, out.values) << " | " << WithInterval(out.held_out) << " ("
+         << WithInterval(out.held_out_defaults) << ") | " << Verdict(out.held_out, out.held_out_defaults) << " | "
+         << KnobText(f.variant, f.params, alone.values) << " | " << WithInterval(alone.held_out) << " ("
+         << WithInterval(alone.held_out_defaults) << ") | " << Verdict(alone.held_out, alone.held_out_defaults)
+         << " |\n";
+    }
+  md << "\n";
+  return md.str();
+}
+
 }  // namespace
 
 Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::string& out_dir,
                       std::vector<std::string>* warnings) {
-  if (outcome.fits.empty()) return Status::Failure("no fits to report");
+  if (outcome.fits.empty() && outcome.joint_fits.empty()) return Status::Failure("no fits to report");
   auto staged = StagedDirectory::Create(out_dir);
   if (!staged) return staged.failure();
   StagedDirectory& out = **staged;
 
   nlohmann::json all = {{"spec", spec.name}, {"fits", nlohmann::json::array()}, {"laws", nlohmann::json::array()}};
   for (const MaterialFit& f : outcome.fits) all["fits"].push_back(f.ToJson());
+  if (!outcome.joint_fits.empty()) {
+    all["joint_fits"] = nlohmann::json::array();
+    for (const JointFit& f : outcome.joint_fits) all["joint_fits"].push_back(f.ToJson());
+  }
   for (const FitLaw& l : outcome.laws) {
     nlohmann::json law = {{"variant", l.variant},   {"param", l.param}, {"ndf", l.ndf},
                           {"a", l.law.a},           {"b", l.law.b},     {"materials", l.materials},
@@ -68,7 +163,17 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
   std::vector<std::string> scripts;
   std::map<std::string, std::vector<const MaterialFit*>> by_variant;
   for (const MaterialFit& f : outcome.fits) by_variant[f.variant + " / " + f.param].push_back(&f);
-  for (const FitConfig& c : spec.fits)
+  for (const FitConfig& c : spec.fits) {
+    if (c.IsJoint()) {
+      md << "Joint fit of " << Join(c.joint_params) << " for " << Join(c.variants) << " in";
+      for (std::size_t i = 0; i < c.joint_bounds.size(); ++i)
+        md << (i ? " ×" : "") << " [" << c.joint_bounds[i].lo << ", " << c.joint_bounds[i].hi << "]";
+      md << ", a grid of " << c.sweep_points << " per axis, derivatives " << c.derivatives << ", weights w_f = "
+         << c.weights.flicker << ", w_s = " << c.weights.spatial << ", w_b = " << c.weights.bias
+         << ". Training: " << Shots(c.train) << ". Validation: " << Shots(c.validate) << "."
+         << (c.cross_validate ? " Cross-validated per training scene." : "") << "\n\n";
+      continue;
+    }
     md << "Fit of `" << c.param << "` for " << Join(c.variants) << " in [" << c.lo << ", " << c.hi << "], "
        << c.sweep_points << " sweep points, derivatives " << c.derivatives << ", weights w_f = " << c.weights.flicker
        << ", w_s = " << c.weights.spatial << ", w_b = " << c.weights.bias << ". Training: " << Shots(c.train)
@@ -76,6 +181,7 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
        << (c.maps.empty() ? "" : " Once per normal map, every shot's scene rendered with it in place of its own: " +
                                      Join(c.maps) + ".")
        << "\n\n";
+  }
 
   for (const auto& [key, fits] : by_variant) {
     const MaterialFit& first = *fits.front();
@@ -140,6 +246,7 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
       if (s.code() == ErrorCode::kIo) return out.Unstaged(s.failure());
       if (warnings) warnings->push_back(s.error());
     }
+  if (!outcome.joint_fits.empty()) md << EngineSettingsMarkdown(outcome.joint_fits);
   if (Status s = out.Write("fit.md", md.str()); !s) return s;
   return out.Commit("fit.md");
 }

@@ -99,6 +99,21 @@ TEST(FitND, OneAxisAgreesWithTheOneDimensionalSearch) {
   EXPECT_NEAR(std::log(nd.best[0] / one.best), 0.0, 0.1);
 }
 
+// J's interval: each term's half-width scaled as J scales the term, summed
+// in quadrature over shots and divided by their number.
+TEST(Fit, ObjectiveHalfWidthPropagatesTheTermsIntervals) {
+  ShotTerms t;
+  t.flicker_none = 2, t.relmse_none = 4, t.bias = 0.1;
+  t.flicker_hw = 0.2, t.relmse_hw = 0.4, t.bias_hw = 0.05;
+  const FitWeights w{1, 2, 3};
+  const double f = 0.2 / 2, e = 2 * 0.4 / 4, b = 3 * 2 * 0.1 * 0.05;
+  EXPECT_NEAR(ObjectiveHalfWidth(w, {t}), std::sqrt(f * f + e * e + b * b), 1e-12);
+  EXPECT_NEAR(ObjectiveHalfWidth(w, {t, t}), std::sqrt(2 * (f * f + e * e + b * b)) / 2, 1e-12);
+  t.bias = 0;  // the bias term's width is its interval squared where b = 0
+  EXPECT_NEAR(ObjectiveHalfWidth({0, 0, 1}, {t}), 0.05 * 0.05, 1e-15);
+  EXPECT_EQ(ObjectiveHalfWidth(w, {}), 0);
+}
+
 TEST(Fit, ShotObjectiveIsNormalisedByTheUnfilteredShot) {
   ShotTerms t;
   t.flicker = 2e-6, t.flicker_none = 8e-6;  // a quarter of the flicker

@@ -258,6 +258,56 @@ TEST(Spec, BadFitConfigurationsAreRejectedUpFront) {
   EXPECT_NE(e.find("maps: "), std::string::npos) << e;
 }
 
+TEST(Spec, AJointFitParsesAndItsMistakesAreNamed) {
+  const std::string shots = R"("train": {"scenes": ["sphere", "wires"], "cameras": ["orbit"]},
+  "validate": {"scenes": ["sphere"], "cameras": ["dolly"]})";
+  auto r = ParseSpec(FitSpec(R"(["ggx:0.05"])", R"({"variants": ["vlachos15"],
+  "params": ["curvature_scale", "curvature_bias", "curvature_exponent"],
+  "bounds": [[0.25, 8], [-0.5, 0.5], [0.1, 1]], "cross_validate": true, )" + shots + "}"),
+                     "f.json");
+  ASSERT_TRUE(r.ok()) << r.error();
+  const FitConfig& c = r->fits[0];
+  ASSERT_TRUE(c.IsJoint());
+  EXPECT_EQ(c.joint_params.size(), 3u);
+  EXPECT_FALSE(c.joint_bounds[1].Logarithmic());
+  EXPECT_TRUE(c.joint_bounds[2].Logarithmic());
+  EXPECT_EQ(c.sweep_points, 3);
+  EXPECT_TRUE(c.cross_validate);
+  auto error = [&](const std::string& fit) { return ParseSpec(FitSpec(R"(["ggx:0.05"])", fit), "f.json").error(); };
+  const std::pair<std::string, std::string> bad[] = {
+      {R"({"variants": ["filament"], "params": ["sigma2"], "bounds": [[0.01, 1]], )" + shots + "}",
+       "params: a joint fit needs at least two parameters"},
+      {R"({"variants": ["filament"], "params": ["sigma2", "kappa"], "bounds": [[0.01, 1]], )" + shots + "}",
+       "bounds: must be one [lo, hi] per parameter (2)"},
+      {R"({"variants": ["filament"], "params": ["sigma2", "kappa"], "bounds": [[0.01, 1], [0.3, 0.2]], )" + shots +
+           "}",
+       "bounds[1]: is empty"},
+      {R"({"variants": ["tk19"], "params": ["sigma2", "fp_max"], "bounds": [[0.01, 1], [0.1, 2]], )" + shots + "}",
+       "tk19: has no parameter \"fp_max\""},
+      {R"({"variants": ["filament"], "params": ["sigma2", "sigma2"], "bounds": [[0.01, 1], [0.01, 1]], )" + shots +
+           "}",
+       "sigma2 is named twice"},
+      {R"({"variants": ["filament"], "param": "kappa", "params": ["sigma2", "kappa"], "bounds": [[0.01, 1], [0.01, 1]], )" +
+           shots + "}",
+       "has both \"param\" and \"params\""},
+      {R"({"variants": ["filament"], "params": ["sigma2", "kappa"], "bounds": [[0.01, 1], [0.01, 1]], "defaults": [[0.1, 0.1]], )" +
+           shots + "}",
+       "defaults: a joint fit compares with each variant's own defaults"},
+      {R"({"variants": ["vlachos15"], "params": ["curvature_scale", "curvature_bias"], "bounds": [[0.1, 4], [-2, 0.5]], )" +
+           shots + "}",
+       "vlachos15: "},
+      {R"({"variants": ["filament"], "params": ["sigma2", "kappa"], "bounds": [[0.01, 1], [0.01, 1]], "cross_validate": true,
+  "train": {"scenes": ["sphere"], "cameras": ["orbit"]}, "validate": {"scenes": ["sphere"], "cameras": ["dolly"]}})",
+       "cross_validate: leaves one training scene out: it needs at least two"},
+      {R"({"variants": ["k16-beckmann-rect"], "param": "fp_max", "cross_validate": true, )" + shots + "}",
+       "cross_validate: is for joint fits"},
+  };
+  for (const auto& [fit, message] : bad) {
+    const std::string e = error(fit);
+    EXPECT_NE(e.find(message), std::string::npos) << fit << "\n" << e;
+  }
+}
+
 TEST(Spec, AFitPerNormalMapParses) {
   auto r = ParseSpec(FitSpec(R"(["ggx:0.05"])", R"({"variants": ["lean"], "param": "nm_scale",
   "maps": ["bumps", "ridges"], "train": {"scenes": ["nm-plane"], "cameras": ["orbit"]},

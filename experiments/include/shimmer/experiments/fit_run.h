@@ -30,14 +30,23 @@ struct ShotTerms {
   double relmse = 0, relmse_none = 0;
   double bias = 0;
   double j = 0;
+  // Half-widths of the variant's 95 % intervals (metrics "ci95").
+  double flicker_hw = 0, relmse_hw = 0, bias_hw = 0;
 };
 
 // w_f F/F_none + w_s E/E_none + w_b b^2; a term whose `none` value is 0 counts
 // 0 when the variant is 0 too and its raw value otherwise.
 double ShotObjective(const FitWeights& w, const ShotTerms& t);
 
+// The half-width of J's 95 % interval from its terms' intervals (first
+// order, the terms and shots taken as independent; the `none` renders'
+// own uncertainty is not carried): a guide to which differences in J mean
+// something, not a test.
+double ObjectiveHalfWidth(const FitWeights& w, const std::vector<ShotTerms>& shots);
+
 struct ObjectiveValue {
-  double j = 0;  // mean of the shots' j
+  double j = 0;           // mean of the shots' j
+  double half_width = 0;  // ObjectiveHalfWidth
   std::vector<ShotTerms> shots;
 };
 
@@ -61,8 +70,35 @@ struct FitLaw {
   PowerLaw law;
 };
 
+// One fold of a joint fit's cross-validation: the setting fitted on the
+// training shots without `scene` (leave_out) or on `scene` alone, measured on
+// `scene`'s held-out shots (its training cameras when left out, the
+// validation cameras when fitted alone), beside the defaults there.
+struct CrossFold {
+  std::string scene;
+  bool leave_out = true;
+  std::vector<double> values;
+  ObjectiveValue held_out, held_out_defaults;
+};
+
+// A joint fit (FitConfig::IsJoint) of one variant on one material.
+struct JointFit {
+  std::string variant, material, ndf;
+  double alpha = 0;
+  std::vector<std::string> params;
+  std::vector<FitAxis> bounds;
+  FitND search;
+  double seconds = 0;
+  ObjectiveValue train, validate;  // at the fitted setting
+  std::vector<double> defaults;    // the variant's own setting, compared with
+  ObjectiveValue train_defaults, validate_defaults;
+  std::vector<CrossFold> folds;
+  nlohmann::json ToJson() const;
+};
+
 struct FitOutcome {
   std::vector<MaterialFit> fits;
+  std::vector<JointFit> joint_fits;
   std::vector<FitLaw> laws;
   std::optional<Error> error;  // set when a fit stopped; the fits before it are complete
 };

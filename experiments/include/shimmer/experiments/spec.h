@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "shimmer/experiments/fit.h"
 #include "shimmer/core/result.h"
 #include "shimmer/renderer/user_variant.h"
 
@@ -82,6 +83,17 @@ struct FitConfig {
   ShotSet train, validate;
   FitWeights weights;
   std::vector<std::string> maps;  // normal maps (built-in names or files); empty: each scene's own
+
+  // A joint fit (spec key "params" instead of "param"): several parameters
+  // of each variant at once, on a grid of `sweep_points` per axis and then
+  // Ceres (MinimizeND). `param`, `lo`, `hi` and `defaults` are then unused.
+  std::vector<std::string> joint_params;
+  std::vector<FitAxis> joint_bounds;  // compared with each variant's own defaults (an engine's shipped settings)
+  // Leave each training scene out in turn (fit on the others, measure on it),
+  // and fit each training scene alone (measured on it under the validation
+  // cameras): how far a setting transfers across geometry classes.
+  bool cross_validate = false;
+  bool IsJoint() const { return !joint_params.empty(); }
 };
 
 // "SCENE@MAP" (scene::LoadScene): `scene` with every normal map replaced by

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "commands.h"
+#include "shimmer/experiments/job.h"
 #include "shimmer/experiments/report.h"
 #include "shimmer/experiments/output_files.h"
 #include "shimmer/experiments/result_store.h"
@@ -65,9 +66,11 @@ void AddReportCommand(CLI::App& app) {
     RequireCreatableDirectory("--output", o->out);
     if (o->slow < 1 || o->slow > 100) throw UsageError("--slow must be 1..100, got " + std::to_string(o->slow));
     auto store = Take(experiments::ResultStore::Open(o->db, experiments::ResultStore::Mode::kReadOnly));
-    const auto rows = Take(store->All());
+    std::string note;
+    const auto rows = experiments::RowsOfCore(Take(store->All()), experiments::ShadingCoreVersion(), &note);
     if (rows.empty()) throw UsageError(o->db + ": the results store has no finished jobs");
     std::vector<std::string> warnings;
+    if (!note.empty()) warnings.push_back(note);
     Check(experiments::WriteReport(rows, o->title, o->out, &warnings,
                                    o->video ? GridWriter(*o) : experiments::ShotVideoWriter{}));
     for (const std::string& w : warnings) std::fprintf(stderr, "shimmer: warning: %s\n", w.c_str());

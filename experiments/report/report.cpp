@@ -266,6 +266,22 @@ std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<
   return front;
 }
 
+std::vector<JobResult> RowsOfCore(std::vector<JobResult> rows, const std::string& current, std::string* note) {
+  // An external sequence's row measures frames shimmer did not render: no
+  // core made it, and its id does not move with one.
+  std::set<std::string> cores;
+  for (const JobResult& r : rows)
+    if (!r.job.external) cores.insert(r.core_version);
+  if (cores.size() < 2 || !cores.count(current)) return rows;
+  const std::size_t before = rows.size();
+  std::erase_if(rows, [&](const JobResult& r) { return !r.job.external && r.core_version != current; });
+  if (note)
+    *note = "the store holds rows of " + std::to_string(cores.size()) + " shading-core versions: the report shows the " +
+            std::to_string(rows.size()) + " of this shimmer's core (" + current + ") and leaves out " +
+            std::to_string(before - rows.size()) + " older ones";
+  return rows;
+}
+
 Status WriteReport(const std::vector<JobResult>& rows, const std::string& title, const std::string& out_dir,
                    std::vector<std::string>* warnings, const ShotVideoWriter& video) {
   if (rows.empty()) return Status::Failure("the results store has no finished jobs");

@@ -75,6 +75,31 @@ const VariantSummary& Find(const std::vector<VariantSummary>& all, const std::st
   throw std::runtime_error("no summary of " + label);
 }
 
+// A store run with two shading cores: the report keeps the current core's
+// rows and the external ones, and says how many it left out.
+TEST(ReportRows, RowsOfAnOlderCoreAreLeftOutWithANote) {
+  std::vector<JobResult> rows;
+  for (const char* core : {"old", "new", "new"}) {
+    rows.push_back(MakeResult("tk19", 1, 2));
+    rows.back().core_version = core;
+  }
+  rows.push_back(MakeResult("none", 1, 2));
+  rows.back().core_version = "old";
+  rows.back().job.external = ExternalFrames{};
+  std::string note;
+  const auto kept = RowsOfCore(rows, "new", &note);
+  ASSERT_EQ(kept.size(), 3u);
+  EXPECT_EQ(kept[0].core_version, "new");
+  EXPECT_TRUE(kept[2].job.external.has_value());
+  EXPECT_NE(note.find("2 shading-core versions"), std::string::npos) << note;
+  EXPECT_NE(note.find("leaves out 1 older"), std::string::npos) << note;
+  // One core, or none of them this shimmer's: nothing is left out.
+  note.clear();
+  EXPECT_EQ(RowsOfCore(rows, "other", &note).size(), 4u);
+  EXPECT_TRUE(note.empty());
+  EXPECT_EQ(RowsOfCore({rows[1], rows[2]}, "new", &note).size(), 2u);
+}
+
 TEST(ReportStatistics, QuartilesInterpolateBetweenOrderStatistics) {
   const Quartiles q = QuartilesOf({3, 1, std::nan(""), 2});
   EXPECT_EQ(q.n, 3);

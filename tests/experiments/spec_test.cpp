@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include <algorithm>
 #include <set>
 #include <string_view>
@@ -256,6 +258,26 @@ TEST(Spec, BadFitConfigurationsAreRejectedUpFront) {
   EXPECT_NE(e.find("maps: scene 'sphere@bumps': 'sphere' has no normal map"), std::string::npos) << e;
   e = error(ggx, R"({"variants": ["lean"], "param": "nm_scale", "maps": ["bumbs"], )" + kShots + "}");
   EXPECT_NE(e.find("maps: "), std::string::npos) << e;
+}
+
+// The specs the README runs: each parses, and the ones with fits have them.
+TEST(Spec, CommittedSpecsParse) {
+  int specs = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(SHIMMER_SOURCE_DIR) /
+                                                                 "experiments/specs")) {
+    if (entry.path().extension() != ".json") continue;
+    // external.json reads frames the README renders first (section 4c).
+    if (entry.path().stem() == "external" &&
+        !std::filesystem::exists(std::filesystem::path(SHIMMER_SOURCE_DIR) / "runs/external-frames/tk19"))
+      continue;
+    auto spec = LoadSpec(entry.path().string());
+    EXPECT_TRUE(spec.ok()) << spec.error();
+    ++specs;
+    const std::string name = entry.path().stem().string();
+    if (spec.ok() && (name == "standard" || name == "normal-maps" || name == "engine-settings"))
+      EXPECT_FALSE(spec->fits.empty()) << name;
+  }
+  EXPECT_GE(specs, 5);
 }
 
 TEST(Spec, AJointFitParsesAndItsMistakesAreNamed) {

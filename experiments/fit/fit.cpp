@@ -60,6 +60,17 @@ struct LogPowerResidual {
   }
 };
 
+// J is only known to about a percent, so the refinement stops at that level
+// rather than chase noise, and after a few iterations (each renders again).
+ceres::Solver::Options RefinementOptions() {
+  ceres::Solver::Options options;
+  options.max_num_iterations = 6;
+  options.function_tolerance = 1e-4;
+  options.parameter_tolerance = 1e-3;
+  options.logging_type = ceres::SILENT;
+  return options;
+}
+
 // The ND search's coordinates: u = log p on logarithmic axes, p otherwise.
 double ToU(const FitAxis& a, double p) { return a.Logarithmic() ? std::log(p) : p; }
 double FromU(const FitAxis& a, double u) { return a.Logarithmic() ? std::exp(u) : u; }
@@ -203,15 +214,8 @@ FitND MinimizeND(const std::function<double(const std::vector<double>&)>& object
       problem.SetParameterLowerBound(u.data(), int(i), blo[i]);
       problem.SetParameterUpperBound(u.data(), int(i), bhi[i]);
     }
-    ceres::Solver::Options options;
-    // As in 1-D: J is known to about a percent, and an iteration costs up
-    // to 2N^2 + 1 renders of every shot.
-    options.max_num_iterations = 6;
-    options.function_tolerance = 1e-4;
-    options.parameter_tolerance = 1e-3;
-    options.logging_type = ceres::SILENT;
     ceres::Solver::Summary summary;
-    ceres::Solve(options, &problem, &summary);
+    ceres::Solve(RefinementOptions(), &problem, &summary);  // an iteration: up to 2N^2 + 1 renders a shot
     j(u);
   }
   for (const auto& [p, v] : fit.samples)
@@ -248,15 +252,8 @@ Fit1D Minimize1D(const std::function<double(double)>& objective, double lo, doub
     problem.AddResidualBlock(new SmoothedGradient(&j, h), nullptr, &u);
     problem.SetParameterLowerBound(&u, 0, blo);
     problem.SetParameterUpperBound(&u, 0, bhi);
-    ceres::Solver::Options options;
-    // J is only known to about a percent, so stop at that level rather than
-    // chase noise: each iteration costs up to three renders of every shot.
-    options.max_num_iterations = 6;
-    options.function_tolerance = 1e-4;
-    options.parameter_tolerance = 1e-3;
-    options.logging_type = ceres::SILENT;
     ceres::Solver::Summary summary;
-    ceres::Solve(options, &problem, &summary);
+    ceres::Solve(RefinementOptions(), &problem, &summary);  // an iteration: up to three renders a shot
     j(u);  // Ceres' answer joins the samples
   }
   // Every sample is a candidate (Ceres' difference points may be the lowest);

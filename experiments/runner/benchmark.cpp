@@ -103,6 +103,7 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
     c.max_ms = *std::max_element(ms[k].begin(), ms[k].end());
     c.none_median_ms = none_ms;
     c.ratio_to_none = none_ms > 0 ? c.median_ms / none_ms : 0;
+    c.core = ShadingCoreVersion();
     c.device = renderers[k]->device_name();
     c.driver = renderers[k]->device_driver();
     costs.push_back(std::move(c));

@@ -263,13 +263,15 @@ std::string BenchmarkDevice(const RunOptions& options) {
   return "";
 }
 
-// Whether the store already has every variant of the batch timed on this device.
+// Whether the store already has every variant of the batch timed on this
+// device by this shading core (a core change moves costs as it moves ids).
 bool BenchmarkDone(const BenchmarkBatch& batch, const BenchmarkOptions& bench, const std::string& device,
                    const std::vector<BenchmarkCost>& existing) {
   return std::all_of(batch.jobs.begin(), batch.jobs.end(), [&](const Job& job) {
     return std::any_of(existing.begin(), existing.end(), [&](const BenchmarkCost& c) {
       return c.scene == batch.scene && c.derivatives == batch.derivatives && c.variant == job.variant &&
-             c.params == job.params && c.width == bench.width && c.height == bench.height && c.device == device;
+             c.params == job.params && c.width == bench.width && c.height == bench.height && c.device == device &&
+             c.core == ShadingCoreVersion();
     });
   });
 }

@@ -192,6 +192,19 @@ TEST(RunCli, ShotsAreCheckedAndVariantsBenchmarkedOnce) {
   const std::string rerun = ReadText(ws.dir / "log.txt").substr(before);
   EXPECT_EQ(rerun.find("checked"), std::string::npos) << rerun;
   EXPECT_EQ(rerun.find("benchmark"), std::string::npos) << rerun;
+  // A batch timed by another shading core is timed again, and only that one.
+  for (const BenchmarkCost& c : *costs) EXPECT_EQ(c.core, ShadingCoreVersion());
+  {
+    auto writable = ResultStore::Open((ws.dir / "r.db").string());
+    ASSERT_TRUE(writable) << writable.error();
+    BenchmarkCost old = costs->front();
+    old.core = "an older core";
+    ASSERT_TRUE((*writable)->InsertBenchmarks({old}));
+  }
+  const std::size_t before_old = ReadText(ws.dir / "log.txt").size();
+  ASSERT_EQ(std::system(ws.Run("--db r.db --work r").c_str()), 0);
+  const std::string retimed = ReadText(ws.dir / "log.txt").substr(before_old);
+  EXPECT_NE(retimed.find("1 benchmark batches timed"), std::string::npos) << retimed;
 }
 
 // Seed 003's physics: on nm-plane under dolly (minified bumps, the footprint

@@ -55,6 +55,9 @@ struct BenchmarkCost {
   double none_median_ms = 0;                     // `none` in the same batch
   double ratio_to_none = 0;                      // median_ms / none_median_ms
   std::string device, driver;
+  // The shading core that rendered the batch: a changed core is timed again.
+  // Empty for rows from before it was recorded.
+  std::string core;
 };
 
 // Fills the changes (d_tv_ref, d_energy_bias, d_tv_err) and the verdict of a
@@ -74,7 +77,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotCheck, reference_id, scene, 
                                                 tol_tv, unconverged_pixels, converged)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BenchmarkCost, scene, derivatives, variant, params, material, camera,
                                                 width, height, repetitions, median_ms, min_ms, max_ms, none_median_ms,
-                                                ratio_to_none, device, driver)
+                                                ratio_to_none, device, driver, core)
 
 struct JobResult {
   std::string id;

@@ -75,10 +75,8 @@ class CachedMeasure {
 
 // Half the width of a metric's 95 % interval (0 when the row has none).
 double HalfWidth(const nlohmann::json& metrics, const char* key) {
-  if (!metrics.contains("ci95") || !metrics["ci95"].contains(key)) return 0;
-  const nlohmann::json& ci = metrics["ci95"][key];
-  if (!ci.is_array() || ci.size() != 2 || !ci[0].is_number() || !ci[1].is_number()) return 0;
-  return 0.5 * (ci[1].get<double>() - ci[0].get<double>());
+  const auto ci = MetricCi95(metrics, key);
+  return ci ? 0.5 * (ci->second - ci->first) : 0;
 }
 
 struct Objective {

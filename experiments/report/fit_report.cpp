@@ -6,6 +6,7 @@
 #include <map>
 #include <sstream>
 
+#include "report_parts.h"
 #include "shimmer/core/gnuplot.h"
 #include "shimmer/experiments/output_files.h"
 
@@ -65,11 +66,20 @@ std::string WithInterval(const ObjectiveValue& v) {
   return FormatNumber(v.j) + " ± " + FormatNumber(v.half_width, "%.2g");
 }
 
-// Whether a fitted setting's J beats the shipped one's beyond both intervals.
+// Whether a fitted setting's J beats the shipped one's beyond both intervals
+// (the report's rule for rows: lower is better, intervals apart).
 std::string Verdict(const ObjectiveValue& fitted, const ObjectiveValue& shipped) {
-  if (fitted.j + fitted.half_width < shipped.j - shipped.half_width) return "fitted better";
-  if (shipped.j + shipped.half_width < fitted.j - fitted.half_width) return "shipped better";
-  return "within intervals";
+  const auto interval = [](const ObjectiveValue& v) {
+    return report::Interval{v.j - v.half_width, v.j + v.half_width};
+  };
+  switch (report::Compare(interval(fitted), interval(shipped))) {
+    case report::Verdict::kBetter:
+      return "fitted better";
+    case report::Verdict::kWorse:
+      return "shipped better";
+    default:
+      return "within intervals";
+  }
 }
 
 std::string EngineSettingsMarkdown(const std::vector<JointFit>& fits) {

@@ -65,11 +65,9 @@ std::string GeometryClass(const std::string& scene) {
 }
 
 Interval Ci95(const JobResult& row, const char* key) {
-  const auto ci = row.metrics.find("ci95");
-  if (ci == row.metrics.end() || !ci->is_object()) return {};
-  const auto v = ci->find(key);
-  if (v == ci->end() || !v->is_array() || v->size() != 2 || !(*v)[0].is_number() || !(*v)[1].is_number()) return {};
-  return {(*v)[0].get<double>(), (*v)[1].get<double>()};
+  const auto ci = MetricCi95(row.metrics, key);
+  if (!ci) return {};
+  return {ci->first, ci->second};
 }
 
 Verdict Compare(Interval a, Interval b) {

@@ -334,7 +334,10 @@ ShotSet ParseShots(const json& j, const std::string& key) {
 void ParseWeights(const json& f, FitConfig* fit);
 FitConfig ParseJointFit(const json& f, const Spec& spec);
 
+// What every fit entry has: its derivative source and its shot sets.
 void ParseFitShots(const json& f, FitConfig* c) {
+  if (f.contains("derivatives"))
+    c->derivatives = std::string(shading::DerivativeSourceName(Derivatives(f["derivatives"], "derivatives")));
   c->train = ParseShots(f["train"], "train");
   c->validate = ParseShots(f["validate"], "validate");
 }
@@ -376,8 +379,6 @@ FitConfig ParseFit(const json& f, const Spec& spec) {
     for (double d : c.defaults)
       if (d <= 0) throw SpecError{"defaults", "must be positive"};
   }
-  if (f.contains("derivatives"))
-    c.derivatives = std::string(shading::DerivativeSourceName(Derivatives(f["derivatives"], "derivatives")));
   ParseFitShots(f, &c);
   if (f.contains("maps")) {
     c.maps = StringList(f["maps"], "maps");
@@ -444,8 +445,6 @@ FitConfig ParseJointFit(const json& f, const Spec& spec) {
   c.defaults.clear();
   if (f.contains("defaults"))
     throw SpecError{"defaults", "a joint fit compares with each variant's own defaults (`shimmer variants`)"};
-  if (f.contains("derivatives"))
-    c.derivatives = std::string(shading::DerivativeSourceName(Derivatives(f["derivatives"], "derivatives")));
   ParseFitShots(f, &c);
   if (f.contains("cross_validate")) {
     if (!f["cross_validate"].is_boolean()) throw SpecError{"cross_validate", "must be true or false"};

@@ -219,6 +219,15 @@ double Metric(const nlohmann::json& metrics, const char* key) {
   return metrics.contains(key) && metrics[key].is_number() ? metrics[key].get<double>() : std::nan("");
 }
 
+std::optional<std::pair<double, double>> MetricCi95(const nlohmann::json& metrics, const char* key) {
+  const auto ci = metrics.find("ci95");
+  if (ci == metrics.end() || !ci->is_object()) return std::nullopt;
+  const auto v = ci->find(key);
+  if (v == ci->end() || !v->is_array() || v->size() != 2 || !(*v)[0].is_number() || !(*v)[1].is_number())
+    return std::nullopt;
+  return std::pair((*v)[0].get<double>(), (*v)[1].get<double>());
+}
+
 double FlickerIndex(const nlohmann::json& metrics) {
   return metrics.contains("flicker") ? Metric(metrics["flicker"], "flicker_index") : std::nan("");
 }

@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -106,6 +107,9 @@ void JoinExternalCosts(std::vector<JobResult>& rows);
 // or not a number; FlickerIndex reads flicker.flicker_index.
 double Metric(const nlohmann::json& metrics, const char* key);
 double FlickerIndex(const nlohmann::json& metrics);
+// A metric's 95 % interval, ci95[key] = [lo, hi]; empty when the row has none
+// (stores from before intervals).
+std::optional<std::pair<double, double>> MetricCi95(const nlohmann::json& metrics, const char* key);
 
 class ResultStore {
  public:

@@ -286,7 +286,8 @@ Result<Frame> Renderer::RenderFrame(int index) {
   };
   put(f.light_a, l.vec, double(static_cast<int>(l.type)));
   put(f.light_b, l.radiance, l.radius);
-  put(f.mat_a, {s.material.alpha.x, s.material.alpha.y, 0.0}, 0);  // the NDF is specialization constant 4
+  // The NDF is specialization constant 4; a glint material's local lobe and density ride along.
+  put(f.mat_a, {s.material.alpha.x, s.material.alpha.y, s.material.glint_alpha_l}, s.material.glint_density);
   put(f.mat_f0, s.material.f0, 0);
   put(f.mat_albedo, s.material.albedo, 0);
   f.size[0] = s.width;

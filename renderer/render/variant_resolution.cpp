@@ -11,6 +11,8 @@ Result<ResolvedVariant> ResolveVariant(const RenderSettings& s) {
   const bool reference = s.reference_spp > 0 || s.reference_tolerance > 0;
   if (!s.variant_file.empty()) {
     if (reference) return R::Failure("a reference renders variant none, not a variant file");
+    if (s.material.ndf == shading::Ndf::kGlints)
+      return R::Failure("a variant file filters a smooth NDF; a glint material takes none and the glint variants");
     auto user = shading::LoadUserVariant(s.variant_file);
     if (!user) return user.failure();
     v.name = "user:" + std::filesystem::path(s.variant_file).filename().string();
@@ -39,8 +41,7 @@ Result<ResolvedVariant> ResolveVariant(const RenderSettings& s) {
   if (shading::FiltersNormalMap(info) && !(scene::SceneFeatures(s.scene) & shading::kSceneNormalMaps))
     return R::Failure("variant " + s.variant + " filters normal maps, and scene '" + s.scene.name +
                       "' has none (use a scene with a normal map, such as nm-plane)");
-  if (info.ggx_only && s.material.ndf != shading::Ndf::kGgx)
-    return R::Failure("variant " + s.variant + " filters GGX only; use a ggx material");
+  if (auto mismatch = shading::MaterialMismatch(info, s.material.ndf)) return R::Failure(*mismatch);
   auto params = shading::ResolveParams(info, s.param_overrides);
   if (!params) return params.failure();
   v.name = s.variant;

@@ -54,6 +54,11 @@ shading::LightDesc SgLight(glm::dvec3 axis, double sharpness, double irradiance)
 // ambient light, sharp enough that the highlights of glossy materials still
 // alias.
 constexpr double kBuiltinSgSharpness = 200;
+// A glint material's defaults: a microdetail's lobe, and microdetails per
+// unit area (a level-0 glint cell is 1 / sqrt(density) wide).
+constexpr double kDefaultGlintAlphaL = 0.03;
+constexpr double kDefaultGlintDensity = 1e4;
+constexpr double kMaxGlintDensity = 1e12;
 
 Scene SphereScene() {
   Scene s;
@@ -378,11 +383,46 @@ Scene NmMagnifyScene() {
   return s;
 }
 
+shading::MaterialDesc GlintMaterial(glm::dvec2 alpha, double alpha_l, double density, double albedo) {
+  shading::MaterialDesc m;
+  m.ndf = shading::Ndf::kGlints;
+  m.alpha = alpha;
+  m.glint_alpha_l = alpha_l;
+  m.glint_density = density;
+  m.albedo = glm::dvec3(albedo);
+  return m;
+}
+
+// Seed 001's snow: a glittering plane receding from the camera at a grazing
+// angle, the light low in front of it, so that the footprint grows from a
+// few microdetails per pixel near the camera (96 x 96) to thousands far away.
+Scene GlintPlaneScene() {
+  Scene s;
+  s.name = "glint-plane";
+  s.primitives.push_back({Primitive::Type::kPlane, {0, 0, 0}, {0, 0, 0}, 0.0});
+  s.light = Directional({0.0, 0.35, -1.0}, 3.0);
+  s.material = GlintMaterial({0.3, 0.3}, 0.03, 1e4, 0.3);
+  s.rig = {{0, 0, 0}, 6.0, 12.0, 0.0, 40.0};
+  return s;
+}
+
+// A glittering sphere: isotropic footprints in its middle, grazing and
+// anisotropic ones at the silhouette.
+Scene GlintSphereScene() {
+  Scene s;
+  s.name = "glint-sphere";
+  s.primitives.push_back({Primitive::Type::kSphere, {0, 0, 0}, {0, 0, 0}, 1.0});
+  s.light = Directional({-0.5, 0.6, 0.8}, 3.0);
+  s.material = GlintMaterial({0.2, 0.2}, 0.02, 1e5, 0.3);
+  s.rig = {{0, 0, 0}, 4.0, 15.0, 0.0, 35.0};
+  return s;
+}
+
 }  // namespace
 
 std::vector<std::string_view> BuiltinSceneNames() {
-  return {"sphere",          "sphere-field", "wires",          "bumpy-plane", "sg-sphere-field",
-          "sg-plane",        "sg-bumpy-plane", "nm-plane",     "nm-sphere",   "nm-magnify"};
+  return {"sphere",          "sphere-field",   "wires",    "bumpy-plane", "sg-sphere-field", "sg-plane",
+          "sg-bumpy-plane",  "nm-plane",       "nm-sphere", "nm-magnify", "glint-plane",     "glint-sphere"};
 }
 
 namespace {
@@ -433,6 +473,8 @@ Result<Scene> LoadScene(const std::string& name) {
   if (name == "nm-plane") return NmPlaneScene();
   if (name == "nm-sphere") return NmSphereScene();
   if (name == "nm-magnify") return NmMagnifyScene();
+  if (name == "glint-plane") return GlintPlaneScene();
+  if (name == "glint-sphere") return GlintSphereScene();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(name, ec)) {
     std::string list;
@@ -627,14 +669,18 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
 Result<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading::MaterialDesc& base) {
   using R = Result<shading::MaterialDesc>;
   const std::string usage =
-      " (expected NDF:ALPHA[,ALPHA_Y][,f0=V|R/G/B][,albedo=V|R/G/B], e.g. ggx:0.05, or blinn-phong:POWER[,POWER_Y])";
+      " (expected NDF:ALPHA[,ALPHA_Y][,f0=V|R/G/B][,albedo=V|R/G/B], e.g. ggx:0.05, or blinn-phong:POWER[,POWER_Y], "
+      "or glints:ALPHA[,ALPHA_Y][,local=ALPHA_L][,density=N])";
   shading::MaterialDesc m = base;
   auto colon = spec.find(':');
   if (colon == std::string_view::npos) return R::Failure("material '" + std::string(spec) + "'" + usage);
   auto ndf = shading::ParseNdf(spec.substr(0, colon));
   if (!ndf)
-    return R::Failure("material '" + std::string(spec) + "': NDF must be ggx, beckmann or blinn-phong" + usage);
+    return R::Failure("material '" + std::string(spec) + "': NDF must be ggx, beckmann, blinn-phong or glints" + usage);
   m.ndf = *ndf;
+  const bool glints = m.ndf == shading::Ndf::kGlints;
+  m.glint_alpha_l = glints ? kDefaultGlintAlphaL : 0.0;
+  m.glint_density = glints ? kDefaultGlintDensity : 0.0;
   // Blinn-Phong is given by its power s (seed 003), alpha^2 = 2 / (s + 2).
   const bool power = m.ndf == shading::Ndf::kBlinnPhong;
   std::vector<double> alphas;
@@ -664,6 +710,24 @@ Result<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading
       continue;
     }
     std::string key = item.substr(0, eq), value = item.substr(eq + 1);
+    if (key == "local" || key == "density") {
+      if (!glints)
+        return R::Failure("material '" + std::string(spec) + "': '" + key + "' is a glint material's field (glints:...)");
+      std::size_t used = 0;
+      double v = 0;
+      try {
+        v = std::stod(value, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      const bool ok = used != 0 && used == value.size() && std::isfinite(v) &&
+                      (key == "local" ? v > 0 && v <= 1 : v > 0 && v <= kMaxGlintDensity);
+      if (!ok)
+        return R::Failure("material '" + std::string(spec) + "': " + key + " '" + value + "' must be a number in " +
+                          (key == "local" ? "(0, 1]" : "(0, 1e12]"));
+      (key == "local" ? m.glint_alpha_l : m.glint_density) = v;
+      continue;
+    }
     glm::dvec3 rgb;
     if (!ParseRgb(value, &rgb))
       return R::Failure("material '" + std::string(spec) + "': " + key + " expects V or R/G/B (>= 0), got '" + value +
@@ -698,6 +762,7 @@ std::string MaterialSpec(const shading::MaterialDesc& m) {
   auto value = [&m](double alpha) { return m.ndf == shading::Ndf::kBlinnPhong ? shading::BlinnPhongPower(alpha) : alpha; };
   o << shading::NdfName(m.ndf) << ":" << value(m.alpha.x);
   if (m.alpha.y != m.alpha.x) o << "," << value(m.alpha.y);
+  if (m.ndf == shading::Ndf::kGlints) o << ",local=" << m.glint_alpha_l << ",density=" << m.glint_density;
   o << ",f0=" << rgb(m.f0) << ",albedo=" << rgb(m.albedo);
   return o.str();
 }

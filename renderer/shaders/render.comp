@@ -48,7 +48,7 @@ layout(std140, binding = 0) uniform FrameBuf {
   CameraGpu prevCam;
   vec4 lightA;  // direction or centre, type
   vec4 lightB;  // radiance or intensity, radius
-  vec4 matA;    // alpha x, alpha y, unused, unused (the NDF is MATERIAL_NDF)
+  vec4 matA;    // alpha x, alpha y, glint alpha_l, glint density (the NDF is MATERIAL_NDF)
   vec4 matF0;
   vec4 matAlbedo;
   ivec4 size;   // width, height, first row and row count of this dispatch's band
@@ -212,6 +212,13 @@ vec4 lightNumbers(uint seed, int k) {
   return vec4(a, b);
 }
 
+// A reference sample's NDF: a glint material at its finest level at the
+// sample's point (glints.glsl), else the variant's.
+FilteredNdf sampleNdf(SurfaceSample s, ShadingFootprint f, Material m, VariantParams vp) {
+  if (MATERIAL_NDF == NDF_GLINTS) return glintNdfOf(VARIANT_ID, m, s, pointGlintFootprint(s));
+  return runVariant(m.ndf, m.alpha, f, vp);
+}
+
 SampleSums addSample(SampleSums a, SurfaceSample s, Ray ray, Light light, Material m, VariantParams vp, vec4 u) {
   ShadingFootprint f = zeroFootprint(s);
 #ifdef SHIMMER_USER_VARIANT
@@ -219,7 +226,7 @@ SampleSums addSample(SampleSums a, SurfaceSample s, Ray ray, Light light, Materi
 #else
   if (VARIANT_ID != VARIANT_NONE) f = analyticFootprint(s, ray, light);
 #endif
-  PixelShade sh = shadeSample(s, f, runVariant(m.ndf, m.alpha, f, vp), m, light, VARIANT_ID, vp, u);
+  PixelShade sh = shadeSample(s, f, sampleNdf(s, f, m, vp), m, light, VARIANT_ID, vp, u);
   a.spec += sh.specular;
   a.diff += sh.diffuse;
   return a;
@@ -248,6 +255,8 @@ void main() {
   m.alpha = frame.matA.xy;
   m.f0 = frame.matF0.xyz;
   m.albedo = frame.matAlbedo.xyz;
+  m.glintAlphaL = frame.matA.z;
+  m.glintDensity = frame.matA.w;
   VariantParams vp;
   vp.fp_max = pc.params.x;
   vp.fp_min_cap = pc.params.y;
@@ -267,6 +276,8 @@ void main() {
     // differences the normals it filtered (renderPixelOracle in pixel.glsl).
     NormalMapFilter nf = levelZeroFilter();
     FilteredCentre fc;
+    // A glint material's texture-space footprint (glints.glsl).
+    GlintFootprint gf;
     if (DERIV_MODE == DERIV_ANALYTIC) {
       if (NM_FILTER != NMF_NONE) {
         nf = analyticNormalMapFilter(NM_FILTER, s, ray);
@@ -274,6 +285,7 @@ void main() {
         s = fc.s;
       }
       f = analyticFootprintFiltered(s, ray, light, nf);
+      if (MATERIAL_NDF == NDF_GLINTS) gf = analyticGlintFootprint(s, ray);
     } else if (DERIV_MODE == DERIV_QUAD_FINE) {
       bool right = (lane & 1u) != 0u;
       bool bottom = (lane & 2u) != 0u;
@@ -287,6 +299,8 @@ void main() {
         v = filteredSample(v, c.pos, light, nf);
       }
       f = quadFootprint(s, right ? h : s, right ? s : h, bottom ? v : s, bottom ? s : v);
+      if (MATERIAL_NDF == NDF_GLINTS)
+        gf = quadGlintFootprint(s, right ? h : s, right ? s : h, bottom ? v : s, bottom ? s : v);
     } else {
       ivec2 q = px - ivec2(int(lane & 1u), int(lane >> 1u));
       SurfaceSample s0 = quadNeighbour(s, broadcastLane(s, 0u), c, light, q);
@@ -301,13 +315,18 @@ void main() {
         s2 = filteredSample(s2, c.pos, light, nf);
       }
       f = quadFootprint(s, s0, s1, s0, s2);
+      if (MATERIAL_NDF == NDF_GLINTS) gf = quadGlintFootprint(s, s0, s1, s0, s2);
     }
     if (NM_FILTER != NMF_NONE) {
       m.alpha = fc.lobe.alpha;
       s = turnedSample(s, fc.lobe.angle);
       f = turnedFootprint(f, fc.lobe.angle);
     }
-    FilteredNdf ndf = runVariant(m.ndf, m.alpha, f, vp);
+    FilteredNdf ndf;
+    if (MATERIAL_NDF == NDF_GLINTS)
+      ndf = glintNdfOf(VARIANT_ID, m, s, gf);
+    else
+      ndf = runVariant(m.ndf, m.alpha, f, vp);
     PixelShade sh = shadeSample(s, f, ndf, m, light, VARIANT_ID, vp, QUADRATURE);
     if (!inside) return;
     put3(CH_BEAUTY, idx, sh.specular + sh.diffuse);
@@ -386,7 +405,6 @@ void main() {
     Ray ray = cameraRay(c, pixelCentre(px));
     SurfaceSample s = traceRay(ray, light);
     ShadingFootprint f = analyticFootprint(s, ray, light);
-    writeAovs(idx, px, s, shadeSample(s, f, runVariant(m.ndf, m.alpha, f, vp), m, light, VARIANT_ID, vp, QUADRATURE),
-              prev);
+    writeAovs(idx, px, s, shadeSample(s, f, sampleNdf(s, f, m, vp), m, light, VARIANT_ID, vp, QUADRATURE), prev);
   }
 }

@@ -24,7 +24,7 @@ real beckmannLambda(vec3 w, vec2 alpha) {
 real smithLambda(int ndf, vec3 w, vec2 alpha) {
   alpha = clampAlpha(alpha);
   // Blinn-Phong takes Beckmann's Lambda at the same alpha (Walter et al. 2007).
-  if (ndf == NDF_BECKMANN || ndf == NDF_BLINN_PHONG) return beckmannLambda(w, alpha);
+  if (ndf == NDF_BECKMANN || ndf == NDF_BLINN_PHONG || ndf == NDF_GLINTS) return beckmannLambda(w, alpha);
   return ggxLambda(w, alpha);
 }
 

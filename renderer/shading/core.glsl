@@ -9,4 +9,5 @@
 #include "sg_light.glsl"
 #include "normal_map.glsl"
 #include "scene.glsl"
+#include "glints.glsl"
 #include "pixel.glsl"

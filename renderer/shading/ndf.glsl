@@ -11,6 +11,9 @@ const int NDF_BECKMANN = 1;
 // formulas for, with the power s = 2 / alpha^2 - 2 of Walter et al. 2007
 // (the materials give alpha; `blinn-phong:S` in a material spec converts).
 const int NDF_BLINN_PHONG = 2;
+// Glints (glints.glsl): Beckmann microdetail slopes with a local lobe; where
+// a smooth density is asked of it, the global NDF, which is Beckmann.
+const int NDF_GLINTS = 3;
 
 // Anisotropic GGX (Trowbridge-Reitz) slope density.
 real ggxP22(vec2 s, vec2 a) {
@@ -59,7 +62,7 @@ real blinnPhongP22(vec2 s, vec2 a) {
 real slopeDensity(int ndf, vec2 s, vec2 a) {
   a = clampAlpha(a);
   s = clampSlope(s);
-  if (ndf == NDF_BECKMANN) return beckmannP22(s, a);
+  if (ndf == NDF_BECKMANN || ndf == NDF_GLINTS) return beckmannP22(s, a);
   if (ndf == NDF_BLINN_PHONG) return blinnPhongP22(s, a);
   return ggxP22(s, a);
 }
@@ -70,7 +73,7 @@ real slopeDensity(int ndf, vec2 s, vec2 a) {
 // generalises the ellipsoid NDF to an arbitrary orientation. q >= 0, det > 0.
 real slopeDensityQuadratic(int ndf, real q, real det) {
   real norm = PI * sqrt(det);
-  if (ndf == NDF_BECKMANN) return exp(-q) / norm;
+  if (ndf == NDF_BECKMANN || ndf == NDF_GLINTS) return exp(-q) / norm;
   if (ndf == NDF_BLINN_PHONG) return blinnPhongP22Quadratic(q, det);
   real t = real(1) + q;
   return real(1) / (norm * t * t);

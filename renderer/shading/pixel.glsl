@@ -26,10 +26,20 @@ struct Light {
 
 struct Material {
   int ndf;
-  vec2 alpha;
+  vec2 alpha;  // a glint material's: its microdetails' slopes (glints.glsl)
   vec3 f0;
   vec3 albedo;
+  real glintAlphaL;   // a glint material's local lobe,
+  real glintDensity;  // and its microdetails per unit area
 };
+
+GlintMaterial glintMaterial(Material m) {
+  GlintMaterial g;
+  g.alpha = m.alpha;
+  g.alphaL = m.glintAlphaL;
+  g.density = m.glintDensity;
+  return g;
+}
 
 struct SurfaceSample {
   int prim;  // -1: the ray missed
@@ -292,6 +302,73 @@ ShadingFootprint analyticFootprint(SurfaceSample s, Ray r, Light light) {
   return analyticFootprintFiltered(s, r, light, levelZeroFilter());
 }
 
+// ---- glint footprints (glints.glsl) ------------------------------------------
+// Glints live in scene.glsl's uv stretched to lengths on the surface, so that
+// a material's density (per unit area) means the same on every primitive:
+// planes as they are; spheres u times the equator's circumference and v
+// times half of it; capsules u times the circumference.
+vec2 glintUvScale(Prim p) {
+  if (isSphere(p)) return vec2(real(2) * PI * p.radius, PI * p.radius);
+  if (isCapsule(p)) return vec2(real(2) * PI * p.radius, real(1));
+  return vec2(real(1), real(1));
+}
+
+// Surface area per unit of that uv area: rho / r on a sphere, whose u lines
+// shorten towards the poles; 1 elsewhere.
+real glintAreaScale(Prim p, vec3 q) {
+  if (!isSphere(p)) return real(1);
+  vec3 d = q - p.a;
+  return max(length(vec2(d.x, d.z)) / p.radius, real(1e-6));
+}
+
+GlintFootprint pointGlintFootprint(SurfaceSample s) {
+  GlintFootprint g;
+  g.uv = vec2(real(0), real(0));
+  g.duvdx = g.uv;
+  g.duvdy = g.uv;
+  g.areaScale = real(1);
+  if (s.prim < 0) return g;
+  Prim pr = loadPrim(s.prim);
+  g.uv = surfaceUv(pr, s.p) * glintUvScale(pr);
+  g.areaScale = glintAreaScale(pr, s.p);
+  return g;
+}
+
+// From the quad's neighbours (x0/x1 along x, y0/y1 along y, as quadFootprint).
+GlintFootprint quadGlintFootprint(SurfaceSample s, SurfaceSample x0, SurfaceSample x1, SurfaceSample y0,
+                                  SurfaceSample y1) {
+  GlintFootprint g = pointGlintFootprint(s);
+  if (s.prim < 0) return g;
+  Prim pr = loadPrim(s.prim);
+  vec2 scale = glintUvScale(pr);
+  real period = surfaceUPeriod(pr) * scale.x;
+  vec2 dx = (surfaceUv(pr, x1.p) - surfaceUv(pr, x0.p)) * scale;
+  vec2 dy = (surfaceUv(pr, y1.p) - surfaceUv(pr, y0.p)) * scale;
+  g.duvdx = vec2(wrappedDifference(dx.x, period), dx.y);
+  g.duvdy = vec2(wrappedDifference(dy.x, period), dy.y);
+  return g;
+}
+
+// From the ray differentials: d uv = (grad u . dp, grad v . dp).
+GlintFootprint analyticGlintFootprint(SurfaceSample s, Ray r) {
+  GlintFootprint g = pointGlintFootprint(s);
+  if (s.prim < 0) return g;
+  Prim pr = loadPrim(s.prim);
+  vec2 scale = glintUvScale(pr);
+  UvGradient grad = surfaceUvGradient(pr, s.p);
+  vec3 dpx = surfaceDifferential(s, r, r.ddx);
+  vec3 dpy = surfaceDifferential(s, r, r.ddy);
+  g.duvdx = vec2(dot(grad.du, dpx), dot(grad.dv, dpx)) * scale;
+  g.duvdy = vec2(dot(grad.du, dpy), dot(grad.dv, dpy)) * scale;
+  return g;
+}
+
+// A glint material's NDF as the variant shades it (none: the finest level
+// at the point).
+FilteredNdf glintNdfOf(int variant, Material m, SurfaceSample s, GlintFootprint g) {
+  return glintNdf(glintModeOf(variant), glintMaterial(m), s.hpp, g);
+}
+
 struct PixelShade {
   vec3 specular;
   vec3 diffuse;
@@ -417,6 +494,7 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
   FilteredCentre fc;
   Ray ray = cameraRay(c, pixelCentre(px));
   r.s = traceRay(ray, light);
+  GlintFootprint gf = pointGlintFootprint(r.s);
   if (r.s.prim < 0 || derivMode == DERIV_ANALYTIC) {
     if (nmf != NMF_NONE) {
       nf = analyticNormalMapFilter(nmf, r.s, ray);
@@ -424,6 +502,7 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
       r.s = fc.s;
     }
     r.f = analyticFootprintFiltered(r.s, ray, light, nf);
+    if (m.ndf == NDF_GLINTS) gf = analyticGlintFootprint(r.s, ray);
   } else {
     ivec2 q = ivec2((px.x / 2) * 2, (px.y / 2) * 2);
     int ox = px.x - q.x;
@@ -452,13 +531,17 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
       y1 = filteredSample(y1, c.pos, light, nf);
     }
     r.f = quadFootprint(r.s, x0, x1, y0, y1);
+    if (m.ndf == NDF_GLINTS) gf = quadGlintFootprint(r.s, x0, x1, y0, y1);
   }
   if (nmf != NMF_NONE) {
     m.alpha = fc.lobe.alpha;
     r.s = turnedSample(r.s, fc.lobe.angle);
     r.f = turnedFootprint(r.f, fc.lobe.angle);
   }
-  r.ndf = evalVariant(variant, m.ndf, m.alpha, r.f, vp);
+  if (m.ndf == NDF_GLINTS)
+    r.ndf = glintNdfOf(variant, m, r.s, gf);
+  else
+    r.ndf = evalVariant(variant, m.ndf, m.alpha, r.f, vp);
   r.shade = shadeSample(r.s, r.f, r.ndf, m, light, variant, vp, vec4(real(-1), real(0), real(0), real(0)));
   return r;
 }

@@ -421,6 +421,8 @@ PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc&
   m.alpha = material.alpha;
   m.f0 = material.f0;
   m.albedo = material.albedo;
+  m.glintAlphaL = material.glint_alpha_l;
+  m.glintDensity = material.glint_density;
   VariantParams p;
   p.fp_max = params.fp_max;
   p.fp_min_cap = params.fp_min_cap;

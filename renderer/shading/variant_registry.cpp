@@ -3,6 +3,7 @@
 #include <cmath>
 #include <deque>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "shimmer/renderer/shading.h"
@@ -158,6 +159,35 @@ std::vector<VariantInfo> BuildCatalogue() {
        {kFpMax1},
        true,
        true},
+      // Glint materials only (glints.glsl). `none` on a glint material shades
+      // the finest level at the pixel centre, as each reference sample does.
+      {"glints-zk16",
+       18,
+       "biscale glints filtered over the pixel footprint: texture-space power-of-two grids, one binomial draw per cell "
+       "and slope bin, trilinear across levels, up to 16 probes along an anisotropic footprint",
+       "seed 001 (Zirr and Kaplanyan, Real-time Rendering of Procedural Multiscale Materials, I3D 2016)",
+       {},
+       false,
+       false,
+       true},
+      {"glints-naive",
+       19,
+       "the sparkle baseline: the level-0 cell holding the point and the slope bin holding h, whatever the footprint "
+       "(the unstable case of seed 001's previous work)",
+       "baseline (seed 001)",
+       {},
+       false,
+       false,
+       true},
+      {"glints-smooth",
+       20,
+       "the global NDF D_g = D_m * D_l, Beckmann with alpha_g^2 = alpha^2 + alpha_l^2: what the glints average to in "
+       "the distance, without sparkles",
+       "seed 001 (biscale NDF)",
+       {},
+       false,
+       false,
+       true},
       // Normal-map filters (normal_map.glsl; scenes with a normal map only).
       // Each combines with a geometric filter as GEOMETRIC+NAME.
       {"nm-point",
@@ -247,7 +277,8 @@ const VariantInfo* FindCombination(std::string_view name) {
     if (v.name == name.substr(0, plus)) geo = &v;
     if (v.name == name.substr(plus + 1)) nm = &v;
   }
-  if (!geo || !nm || FiltersNormalMap(*geo) || !FiltersNormalMap(*nm) || NeedsSgLight(*geo)) return nullptr;
+  if (!geo || !nm || FiltersNormalMap(*geo) || !FiltersNormalMap(*nm) || NeedsSgLight(*geo) || geo->glints)
+    return nullptr;
   auto& [own_name, info] = made.emplace_back(std::string(name), *geo);
   info.name = own_name;
   info.id = geo->id + nm->id;
@@ -276,11 +307,13 @@ std::optional<Ndf> ParseNdf(std::string_view name) {
   if (name == "ggx") return Ndf::kGgx;
   if (name == "beckmann") return Ndf::kBeckmann;
   if (name == "blinn-phong") return Ndf::kBlinnPhong;
+  if (name == "glints") return Ndf::kGlints;
   return std::nullopt;
 }
 
 std::string_view NdfName(Ndf ndf) {
   if (ndf == Ndf::kBlinnPhong) return "blinn-phong";
+  if (ndf == Ndf::kGlints) return "glints";
   return ndf == Ndf::kGgx ? "ggx" : "beckmann";
 }
 
@@ -296,7 +329,20 @@ bool NeedsSgLight(const VariantInfo& info) {
 }
 
 bool ReadsFootprint(const VariantInfo& info) {
-  return info.name != "none" && info.name != "sg-warp" && info.name != "asg-warp" && info.name != "nm-point";
+  return info.name != "none" && info.name != "sg-warp" && info.name != "asg-warp" && info.name != "nm-point" &&
+         info.name != "glints-naive" && info.name != "glints-smooth";
+}
+
+std::optional<std::string> MaterialMismatch(const VariantInfo& info, Ndf ndf) {
+  const bool glint_material = ndf == Ndf::kGlints;
+  if (info.glints && !glint_material)
+    return "variant " + std::string(info.name) +
+           " shades glint materials only; use a glint material such as glints:0.3,local=0.03,density=1e4";
+  if (glint_material && !info.glints && info.id != 0)
+    return "a glint material takes none, supersample-N, glints-zk16, glints-naive or glints-smooth, not " +
+           std::string(info.name);
+  if (info.ggx_only && ndf != Ndf::kGgx) return "variant " + std::string(info.name) + " filters GGX only; use a ggx material";
+  return std::nullopt;
 }
 
 }  // namespace shimmer::shading

@@ -22,7 +22,12 @@ const int VARIANT_SG_WARP = 14;
 const int VARIANT_ASG_WARP = 15;
 const int VARIANT_SG_WARP_K16 = 16;
 const int VARIANT_ASG_WARP_K16 = 17;
-const int VARIANT_COUNT = 18;
+// Glint materials only (glints.glsl): the filtered biscale process, the
+// naive per-cell sparkle and the smooth global NDF.
+const int VARIANT_GLINTS_ZK16 = 18;
+const int VARIANT_GLINTS_NAIVE = 19;
+const int VARIANT_GLINTS_SMOOTH = 20;
+const int VARIANT_COUNT = 21;
 
 // A variant id is a geometric filter above plus NMF_STRIDE times a
 // normal-map filter (NMF_* of normal_map.glsl; 0 for the variants above):

@@ -17,7 +17,9 @@
 
 namespace shimmer::shading {
 
-enum class Ndf { kGgx = 0, kBeckmann = 1, kBlinnPhong = 2 };
+// kGlints: Zirr and Kaplanyan's biscale glints (glints.glsl), alpha its
+// microdetails' Beckmann slopes.
+enum class Ndf { kGgx = 0, kBeckmann = 1, kBlinnPhong = 2, kGlints = 3 };
 // Blinn-Phong power <-> roughness, alpha^2 = 2 / (s + 2) (Walter et al. 2007).
 inline double BlinnPhongAlpha(double power) { return std::sqrt(2 / (power + 2)); }
 inline double BlinnPhongPower(double alpha) { return 2 / (alpha * alpha) - 2; }
@@ -106,6 +108,10 @@ struct MaterialDesc {
   glm::dvec2 alpha{0.1, 0.1};
   glm::dvec3 f0{0.04, 0.04, 0.04};
   glm::dvec3 albedo{0.5, 0.5, 0.5};
+  // A glint material's local lobe (roughness of one microdetail) and its
+  // microdetails per unit area; 0 for the smooth NDFs.
+  double glint_alpha_l = 0;
+  double glint_density = 0;
 };
 
 struct PixelOracle {
@@ -202,6 +208,7 @@ struct VariantInfo {
   std::vector<ParamInfo> params;
   bool widens_roughness;
   bool ggx_only;
+  bool glints = false;  // shades glint materials (glints.glsl), and only those
 };
 
 std::span<const VariantInfo> Variants();
@@ -220,6 +227,10 @@ inline bool FiltersNormalMap(const VariantInfo& info) { return NormalMapFilterId
 // shade SG lights only; every other variant shades any light.
 inline constexpr int kFirstSgVariant = 14, kLastSgVariant = 17;
 bool NeedsSgLight(const VariantInfo& info);
+// Why the variant cannot shade a material of this NDF, or nothing: glint
+// variants need a glint material, which takes none (and supersample-N, its
+// samples being none's) and the glint variants only.
+std::optional<std::string> MaterialMismatch(const VariantInfo& info, Ndf ndf);
 // Whether the variant's result depends on the shading footprint (none and the
 // unfiltered SG warps do not: one derivative source is enough for them).
 bool ReadsFootprint(const VariantInfo& info);

@@ -152,18 +152,10 @@ real glintLog1m(real p) {
   return log(real(1) - p);
 }
 
-// One draw of Binomial(n, p) from the uniform u, for a real n >= 0 (the
-// expected microdetails of a cell: density times area): inversion of
-// P(k) = P(k-1) (n - k + 1) / k p / (1 - p) from P(0) = (1 - p)^n while the
-// mean is small (the sparse, sparkling regime), else the normal
-// approximation with the binomial's variance, which keeps the mean (the
-// clamp at 0 sits 4 standard deviations away). Monotone in u.
-real glintBinomial(real n, real p, real u) {
-  if (!(n > real(0)) || !(p > real(0))) return real(0);
-  if (p >= real(1)) return n;
+// Inversion of Binomial(n, p) at u for an integer n >= 0: P(k) = P(k-1)
+// (n - k + 1) / k p / (1 - p) from P(0) = (1 - p)^n, for a small mean.
+real glintBinomialInversion(real n, real p, real u) {
   real mean = n * p;
-  if (mean > GLINT_INVERSION_MEAN)
-    return clamp(mean + sqrt(mean * (real(1) - p)) * glintNormalQuantile(u), real(0), n);
   real pk = exp(n * glintLog1m(p));
   real cdf = pk;
   real ratio = p / (real(1) - p);
@@ -171,8 +163,8 @@ real glintBinomial(real n, real p, real u) {
   for (int i = 0; i < GLINT_INVERSION_STEPS; i++) {
     if (u <= cdf) break;
     real next = pk * (n - k) / (k + real(1)) * ratio;
-    // Past n (a real n) or where the rest of the tail is below float's
-    // resolution of cdf: u lies in a tail float cannot tell apart.
+    // Past n, or where the rest of the tail is below float's resolution of
+    // cdf: u lies in a tail float cannot tell apart.
     if (!(next > real(0)) || (k > mean && next < real(1e-8))) break;
     pk = next;
     k += real(1);
@@ -180,6 +172,29 @@ real glintBinomial(real n, real p, real u) {
   }
   return k;
 }
+
+// One draw of the microdetails of a cell that reflect: the cell holds a
+// real n of them in expectation (density times area), so floor(n) or
+// floor(n) + 1 with the uniform u2 (mean n), and each reflects with
+// probability p: k ~ Binomial(N, p), E k = n p. Monotone in u: inversion
+// where the mean (or the failures' mean N (1 - p)) is small, the sparse,
+// sparkling regime; else the normal approximation with the binomial's
+// variance, whose clamps to [0, N] then sit 4 standard deviations away and
+// so keep the mean.
+real glintBinomial(real n, real p, real u, real u2) {
+  if (!(n > real(0)) || !(p > real(0))) return real(0);
+  real count = floor(n);
+  if (u2 < n - count) count += real(1);
+  if (count == real(0)) return real(0);
+  if (p >= real(1)) return count;
+  real mean = count * p;
+  if (mean <= GLINT_INVERSION_MEAN) return glintBinomialInversion(count, p, u);
+  if (count - mean <= GLINT_INVERSION_MEAN) return count - glintBinomialInversion(count, real(1) - p, real(1) - u);
+  return clamp(mean + sqrt(mean * (real(1) - p)) * glintNormalQuantile(u), real(0), count);
+}
+
+// The draw of the 4D index (cell, bin): two uniforms from its hash.
+real glintDraw(real n, real p, uint h) { return glintBinomial(n, p, glintUniform(h), glintUniform(glintHash(h ^ 0x27d4eb2fu))); }
 
 // The slope density the microdetails of one cell give at hpp: n of them
 // (expected), bins of side w shifted by the cell's own offset. `blend`:
@@ -194,7 +209,7 @@ real glintCellDensity(GlintMaterial g, int level, ivec2 cell, vec2 hpp, real n, 
     vec2 b = floor(t);
     real px = glintInterval((b.x + offset.x) * w, (b.x + offset.x + real(1)) * w, a.x);
     real py = glintInterval((b.y + offset.y) * w, (b.y + offset.y + real(1)) * w, a.y);
-    real k = glintBinomial(n, px * py, glintUniform(glintBinHash(ch, ivec2(b))));
+    real k = glintDraw(n, px * py, glintBinHash(ch, ivec2(b)));
     return k / (n * w * w);
   }
   t = t - vec2(real(0.5), real(0.5));  // bin b's centre at t = b
@@ -206,10 +221,10 @@ real glintCellDensity(GlintMaterial g, int level, ivec2 cell, vec2 hpp, real n, 
   real py0 = glintInterval(e0.y, e0.y + w, a.y);
   real py1 = glintInterval(e0.y + w, e0.y + real(2) * w, a.y);
   ivec2 i0 = ivec2(b0);
-  real k00 = glintBinomial(n, px0 * py0, glintUniform(glintBinHash(ch, i0)));
-  real k10 = glintBinomial(n, px1 * py0, glintUniform(glintBinHash(ch, i0 + ivec2(1, 0))));
-  real k01 = glintBinomial(n, px0 * py1, glintUniform(glintBinHash(ch, i0 + ivec2(0, 1))));
-  real k11 = glintBinomial(n, px1 * py1, glintUniform(glintBinHash(ch, i0 + ivec2(1, 1))));
+  real k00 = glintDraw(n, px0 * py0, glintBinHash(ch, i0));
+  real k10 = glintDraw(n, px1 * py0, glintBinHash(ch, i0 + ivec2(1, 0)));
+  real k01 = glintDraw(n, px0 * py1, glintBinHash(ch, i0 + ivec2(0, 1)));
+  real k11 = glintDraw(n, px1 * py1, glintBinHash(ch, i0 + ivec2(1, 1)));
   real k = mix(mix(k00, k10, f.x), mix(k01, k11, f.x), f.y);
   return k / (n * w * w);
 }

@@ -43,6 +43,9 @@ FilteredNdf variantAt(int variant, int ndf, vec2 alpha, ShadingFootprint f, Vari
 }  // namespace glsl_f64
 
 static_assert(kPixelCandidates == glsl_f32::PIXEL_CANDIDATES);
+static_assert(int(GlintMode::kFiltered) == glsl_f32::GLINT_FILTERED && int(GlintMode::kPoint) == glsl_f32::GLINT_POINT &&
+              int(GlintMode::kNaive) == glsl_f32::GLINT_NAIVE && int(GlintMode::kSmooth) == glsl_f32::GLINT_SMOOTH);
+static_assert(int(Ndf::kGlints) == glsl_f32::NDF_GLINTS);
 static_assert(kFirstSgVariant == glsl_f32::VARIANT_SG_WARP && kLastSgVariant == glsl_f32::VARIANT_ASG_WARP_K16);
 static_assert(int(LightType::kSg) == glsl_f32::LIGHT_SG && int(LightType::kSphere) == glsl_f32::LIGHT_SPHERE);
 static_assert(kSceneSpheres == glsl_f32::SCENE_SPHERES && kSceneCapsules == glsl_f32::SCENE_CAPSULES &&
@@ -70,6 +73,13 @@ struct Glsl<float> {
   using SgShadingPoint = glsl_f32::SgShadingPoint;
   static glm::vec3 Perpendicular(glm::vec3 n) { return glsl_f32::perpendicularTo(n); }
   static float OneMinusExpNegOver(float y) { return glsl_f32::oneMinusExpNegOver(y); }
+  using GlintMaterial = glsl_f32::GlintMaterial;
+  using GlintFootprint = glsl_f32::GlintFootprint;
+  static auto Glint(int mode, GlintMaterial g, glm::vec<2, float> hpp, GlintFootprint fp) {
+    return glsl_f32::glintNdf(mode, g, hpp, fp);
+  }
+  static float Binomial(float n, float p, float u, float u2) { return glsl_f32::glintBinomial(n, p, u, u2); }
+  static float Interval(float a, float b, float alpha) { return glsl_f32::glintInterval(a, b, alpha); }
 };
 template <>
 struct Glsl<double> {
@@ -90,6 +100,13 @@ struct Glsl<double> {
   using SgShadingPoint = glsl_f64::SgShadingPoint;
   static glm::dvec3 Perpendicular(glm::dvec3 n) { return glsl_f64::perpendicularTo(n); }
   static double OneMinusExpNegOver(double y) { return glsl_f64::oneMinusExpNegOver(y); }
+  using GlintMaterial = glsl_f64::GlintMaterial;
+  using GlintFootprint = glsl_f64::GlintFootprint;
+  static auto Glint(int mode, GlintMaterial g, glm::vec<2, double> hpp, GlintFootprint fp) {
+    return glsl_f64::glintNdf(mode, g, hpp, fp);
+  }
+  static double Binomial(double n, double p, double u, double u2) { return glsl_f64::glintBinomial(n, p, u, u2); }
+  static double Interval(double a, double b, double alpha) { return glsl_f64::glintInterval(a, b, alpha); }
 };
 
 }  // namespace
@@ -117,6 +134,30 @@ FilteredNdf<T> EvaluateVariant(int id, Ndf ndf, glm::vec<2, T> alpha, const Foot
   p.curvature_exponent = params.curvature_exponent;
   auto r = Glsl<T>::Eval(id, static_cast<int>(ndf), alpha, f, p);
   return {r.slope_density, r.density, r.alpha_eff};
+}
+
+template <class T>
+FilteredNdf<T> EvaluateGlints(GlintMode mode, const MaterialDesc& material, glm::vec<2, T> hpp,
+                              const GlintFootprint<T>& footprint) {
+  typename Glsl<T>::GlintMaterial g;
+  g.alpha = glm::vec<2, T>(material.alpha);
+  g.alphaL = T(material.glint_alpha_l);
+  g.density = T(material.glint_density);
+  typename Glsl<T>::GlintFootprint f;
+  f.uv = footprint.uv;
+  f.duvdx = footprint.duvdx;
+  f.duvdy = footprint.duvdy;
+  f.areaScale = footprint.area_scale;
+  auto r = Glsl<T>::Glint(static_cast<int>(mode), g, hpp, f);
+  return {r.slope_density, r.density, r.alpha_eff};
+}
+template <class T>
+T GlintBinomial(T n, T p, T u, T u2) {
+  return Glsl<T>::Binomial(n, p, u, u2);
+}
+template <class T>
+T GlintInterval(T lo, T hi, T alpha) {
+  return Glsl<T>::Interval(lo, hi, alpha);
 }
 
 template <class T>
@@ -309,6 +350,10 @@ SHIMMER_INSTANTIATE(double)
 #define SHIMMER_INSTANTIATE(T)                                                                                 \
   template FilteredNdf<T> EvaluateVariant<T>(int, Ndf, glm::vec<2, T>, const Footprint<T>&, const Params<T>&); \
   template T SlopeDensity<T>(Ndf, glm::vec<2, T>, glm::vec<2, T>);                                             \
+  template FilteredNdf<T> EvaluateGlints<T>(GlintMode, const MaterialDesc&, glm::vec<2, T>,                     \
+                                            const GlintFootprint<T>&);                                          \
+  template T GlintBinomial<T>(T, T, T, T);                                                                      \
+  template T GlintInterval<T>(T, T, T);                                                                         \
   template T GgxRectMeanSeed<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                               \
   template T GgxRectMeanStable<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                             \
   template T GgxRectMeanJacobian<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);

@@ -4,6 +4,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <fstream>
@@ -238,6 +239,51 @@ TEST(MetricsCli, NanPixelsWarnButSucceed) {
   EXPECT_EQ(j["nan_pixels"], 1);
   EXPECT_EQ(j["tv_test"], 0.0);
   EXPECT_NE(o.err.find("frame_0002.exr"), std::string::npos) << o.err;
+}
+
+// --sparkle-threshold adds the "sparkles" object (and the text lines); without it, neither.
+TEST(MetricsCli, SparkleThresholdAddsSparkleStatistics) {
+  TempDir dir;
+  WriteSequence(dir / "test", Flicker(6));  // one 4.0 pixel a frame, everything else below 0.5
+  WriteSequence(dir / "ref", Steady(6));
+  const std::string sequences = (dir / "test").string() + " " + (dir / "ref").string();
+  Outcome o = RunShimmer(sequences + " --json --sparkle-threshold 2", dir.path());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  nlohmann::json j = nlohmann::json::parse(o.out);
+  ASSERT_TRUE(j.contains("sparkles"));
+  EXPECT_EQ(j["sparkles"]["threshold"], 2.0);
+  EXPECT_EQ(j["sparkles"]["test"]["mean_count"], 1.0);
+  EXPECT_EQ(j["sparkles"]["test"]["count_variance"], 0.0);
+  EXPECT_EQ(j["sparkles"]["reference"]["mean_count"], 1.0);
+  EXPECT_EQ(j["sparkles"]["mean_count_ratio"], 1.0);
+  EXPECT_TRUE(j["sparkles"]["count_variance_ratio"].is_null());  // a steady reference: 0 variance
+  // No motion anywhere: tracked in place, with a warning.
+  EXPECT_EQ(j["sparkles"]["test"]["motion"], "none");
+  EXPECT_NE(o.err.find("neither TEST nor REF has motion.X/Y"), std::string::npos) << o.err;
+
+  Outcome plain = RunShimmer(sequences + " --json", dir.path());
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_FALSE(nlohmann::json::parse(plain.out).contains("sparkles"));
+
+  Outcome text = RunShimmer(sequences + " --sparkle-threshold 2", dir.path());
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("sparkles > 2 in test: 1 px per frame"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("sparkles > 2 in reference:"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("sparkles test/reference: mean count 1,"), std::string::npos) << text.out;
+  EXPECT_EQ(RunShimmer(sequences, dir.path()).out.find("sparkles"), std::string::npos);
+}
+
+TEST(MetricsCli, BadSparkleThresholdIsOneError) {
+  TempDir dir;
+  WriteSequence(dir / "test", Steady(3));
+  for (const char* value : {"-1", "-0.5", "nan", "inf", "-inf"}) {
+    Outcome o = RunShimmer((dir / "test").string() + " --json --sparkle-threshold " + value, dir.path());
+    EXPECT_EQ(o.exit_code, 2) << value << ": " << o.err;
+    EXPECT_EQ(o.err.rfind("shimmer: error: --sparkle-threshold must be a finite number >= 0", 0), 0u)
+        << value << ": " << o.err;
+    EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << value << ": " << o.err;
+    EXPECT_TRUE(o.out.empty()) << value;
+  }
 }
 
 }  // namespace

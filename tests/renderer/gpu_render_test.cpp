@@ -169,6 +169,29 @@ TEST(GpuRender, NormalMapFiltersNeedANormalMap) {
   EXPECT_NE(r.error().find("filters normal maps"), std::string::npos) << r.error();
 }
 
+// Glints (seed 001): the process is integer hashes and binomial draws, the
+// same in float and double, so every variant's frame matches the oracle
+// (except where float moves a point across a cell or bin edge, within the
+// 2 % of pixels allowed), the footprint from the quad and from ray
+// differentials, and a grazing plane and a sphere.
+TEST(GpuOracle, GlintScenes) {
+  for (const char* v : {"none", "glints-zk16", "glints-naive", "glints-smooth"})
+    ExpectMatchesOracle("glint-plane", v, DerivativeSource::kQuadFine);
+  ExpectMatchesOracle("glint-sphere", "glints-zk16", DerivativeSource::kQuadFine);
+  ExpectMatchesOracle("glint-sphere", "glints-zk16", DerivativeSource::kAnalytic);
+}
+
+TEST(GpuRender, GlintVariantsAndGlintMaterialsGoTogether) {
+  RenderSettings s = Settings("sphere", "glints-zk16", DerivativeSource::kQuadFine, 8);
+  auto r = Renderer::Create(s);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("shades glint materials only"), std::string::npos) << r.error();
+  s = Settings("glint-plane", "tk19", DerivativeSource::kQuadFine, 8);
+  r = Renderer::Create(s);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.error().find("a glint material takes none"), std::string::npos) << r.error();
+}
+
 // Spherical-Gaussian lights (seed 004): the closed-form warps, the exact BRDF
 // by the fixed quadrature for a point-sampled, a widening and a
 // density-filtering variant (each evaluated at every direction of the light

@@ -114,6 +114,35 @@ struct MaterialDesc {
   double glint_density = 0;
 };
 
+// --- Glints (glints.glsl) -------------------------------------------------------
+// How a glint material is read: filtered over the footprint (glints-zk16),
+// at the finest level at the point (none, each reference sample), the naive
+// level-0 cell (glints-naive), or the smooth global NDF (glints-smooth).
+enum class GlintMode { kFiltered = 0, kPoint = 1, kNaive = 2, kSmooth = 3 };
+
+// World-scaled texture coordinates, their change per pixel, and the surface
+// area per unit uv area (pixel.glsl).
+template <class T>
+struct GlintFootprint {
+  glm::vec<2, T> uv{0};
+  glm::vec<2, T> duvdx{0};
+  glm::vec<2, T> duvdy{0};
+  T area_scale = 1;
+};
+
+// A glint material's (material.ndf == kGlints) slope and solid-angle density at hpp.
+template <class T>
+FilteredNdf<T> EvaluateGlints(GlintMode mode, const MaterialDesc& material, glm::vec<2, T> hpp,
+                              const GlintFootprint<T>& footprint);
+// The process's draw for a cell of n microdetails in expectation (floor(n)
+// or floor(n) + 1 by the uniform u2), each reflecting with probability p:
+// Binomial(N, p) by the uniform u, monotone in u.
+template <class T>
+T GlintBinomial(T n, T p, T u, T u2);
+// P(lo <= X <= hi) for X with Beckmann's one-axis slope marginal of roughness alpha.
+template <class T>
+T GlintInterval(T lo, T hi, T alpha);
+
 struct PixelOracle {
   bool hit = false;
   int prim = -1;

@@ -27,6 +27,7 @@ struct MetricsCliOptions {
   double highlight_threshold = m::HighlightMaskOptions{}.threshold;
   int highlight_dilate = m::HighlightMaskOptions{}.dilate_radius;
   int segment = 0;
+  double sparkle_threshold = 0;  // 0: no sparkle statistics
   bool json = false;
 };
 
@@ -73,6 +74,28 @@ void PrintText(const m::MetricsReport& r) {
   std::printf("flicker of %s (Welch, L = %d, %d segments): 0-2 Hz %.4g | 2-8 Hz %.4g | 8-%g Hz %.4g\n",
               f.signal.c_str(), f.segment_length, f.segments, f.band_low, f.band_mid, r.fps / 2, f.band_high);
   PrintWithInterval("flicker_index", f.flicker_index, r.ci95 ? r.ci95->flicker_index : std::nullopt);
+  if (r.sparkles) {
+    const m::SparkleReport& s = *r.sparkles;
+    auto format = [](const std::optional<double>& v) {
+      char text[32];
+      if (!v) return std::string("undefined");
+      std::snprintf(text, sizeof text, "%.4g", *v);
+      return std::string(text);
+    };
+    auto line = [&](const char* side, const m::SparkleStatistics& x) {
+      std::printf("sparkles > %g in %s: %.4g px per frame, variance %.4g, cv %s; lifetime %s frames, birth rate %s "
+                  "(motion: %s)\n",
+                  s.threshold, side, x.mean_count, x.count_variance, format(x.count_cv).c_str(),
+                  format(x.mean_lifetime).c_str(), format(x.birth_rate).c_str(), x.motion.c_str());
+    };
+    line("test", s.test);
+    if (s.reference) {
+      line("reference", *s.reference);
+      std::printf("sparkles test/reference: mean count %s, count variance %s, lifetime %s\n",
+                  format(s.mean_count_ratio).c_str(), format(s.count_variance_ratio).c_str(),
+                  format(s.lifetime_ratio).c_str());
+    }
+  }
   if (r.bootstrap)
     std::printf("95%% intervals: block bootstrap, %d replicates, blocks of %d frames, %dx%d tiles, seed %llu\n",
                 r.bootstrap->replicates, r.bootstrap->frame_block, r.bootstrap->tile, r.bootstrap->tile,
@@ -104,6 +127,13 @@ void Run(const MetricsCliOptions& o) {
     throw UsageError("--signal must be error or test, got '" + o.signal + "'");
   if (o.segment < 0 || o.segment == 1) throw UsageError("--segment must be >= 2");
   options.segment_length = o.segment;
+  if (!(o.sparkle_threshold >= 0) || !std::isfinite(o.sparkle_threshold)) {
+    char given[32];
+    std::snprintf(given, sizeof given, "%g", o.sparkle_threshold);
+    throw UsageError(std::string("--sparkle-threshold must be a finite number >= 0 (0: no sparkle statistics), got ") +
+                     given);
+  }
+  options.sparkle_threshold = o.sparkle_threshold;
   if (!o.video.empty()) RequireParentDirectory("--video", o.video);
   if (o.slow < 1 || o.slow > 100) throw UsageError("--slow must be 1..100, got " + std::to_string(o.slow));
   if (!o.out.empty()) {
@@ -179,6 +209,9 @@ void AddMetricsCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--signal", o->signal, "Spectrum of: error (T - R, default with REF) or test");
   cmd->add_option("--segment", o->segment, "Welch segment length L (default min(frames, 64))");
+  cmd->add_option("--sparkle-threshold", o->sparkle_threshold,
+                  "Sparkle statistics: pixels whose linear Y exceeds this per frame, their variance over time and "
+                  "lifetime along the motion vectors (default 0: off)");
   cmd->add_option("--out", o->out, "Directory for maps (EXR + PNG heatmaps), spectrum CSV/plot, metrics.json");
   cmd->add_option("--video", o->video,
                   "Write an MP4: labelled reference and test, the signed error below the test, a legend (see "

@@ -88,12 +88,33 @@ MetricsAccumulator::MetricsAccumulator(const AccumulatorSetup& setup)
     for (double f : freq) weights.push_back(WatsonTemporalGain(f) * WatsonTemporalGain(f) * df);
     spectrum_.WeighPixels(std::move(weights));
   }
+  if (setup.sparkle_threshold > 0) {
+    sparkle_test_ = SparkleTracker(setup.width, setup.height, setup.sparkle_threshold);
+    if (setup.has_reference) sparkle_ref_ = SparkleTracker(setup.width, setup.height, setup.sparkle_threshold);
+  }
 }
 
 void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv::Mat& motion,
                                   const std::string& test_source, const std::string& reference_source,
-                                  const cv::Mat& reference_stderr) {
+                                  const cv::Mat& reference_stderr, const cv::Mat& reference_motion) {
   const bool has_ref = setup_.has_reference;
+  // Sparkles: each side follows its own motion vectors, else the other side's, else none.
+  const bool sparkles = sparkle_test_.active();
+  const cv::Mat* test_track = nullptr;
+  const cv::Mat* ref_track = nullptr;
+  if (sparkles) {
+    for (const cv::Mat* m : {&motion, &reference_motion})
+      CV_Assert(m->empty() || (m->type() == CV_32FC2 && m->rows == setup_.height && m->cols == setup_.width));
+    const cv::Mat* own_ref = has_ref && !reference_motion.empty() ? &reference_motion : nullptr;
+    const cv::Mat* own_test = !motion.empty() ? &motion : nullptr;
+    test_track = own_test ? own_test : own_ref;
+    ref_track = own_ref ? own_ref : own_test;
+    if (frames_added_ == 1) {
+      auto whose = [&](const cv::Mat* m) { return !m ? "none" : m == &motion ? "test" : "reference"; };
+      sparkle_motion_test_ = whose(test_track);
+      sparkle_motion_ref_ = whose(ref_track);
+    }
+  }
   const bool with_stderr = has_ref && setup_.reference_stderr && !reference_stderr.empty();
   if (with_stderr) ++stderr_frames_;
   const size_t region_count = region_indices_.size();
@@ -141,6 +162,10 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
       sums.samples = terms.samples;
       sums.non_finite = terms.non_finite;
       rows[y] = sums;
+      if (sparkles) {
+        sparkle_test_.AddRow(y, tv_row, in.region, test_track ? test_track->ptr<cv::Vec2f>(y) : nullptr);
+        if (has_ref) sparkle_ref_.AddRow(y, rv_row, in.region, ref_track ? ref_track->ptr<cv::Vec2f>(y) : nullptr);
+      }
       if (!has_ref) continue;
       const float* se_row = with_stderr ? reference_stderr.ptr<float>(y) : nullptr;
       for (int x = 0; x < width; ++x) {
@@ -191,6 +216,10 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
     rmse_per_frame_.push_back(std::sqrt(frame.error2 / frame.samples));
     // relMSE is averaged the same way: per frame, then over frames.
     relmse_sum_ += frame.relative2 / frame.samples;
+  }
+  if (sparkles) {
+    sparkle_test_.EndFrame();
+    if (has_ref) sparkle_ref_.EndFrame();
   }
   spectrum_.AddFrame(signal_frame_, excluded_);
   if (setup_.with_motion && has_previous) warp_.AddFrame(previous_test_, T, motion, setup_.region, excluded_);
@@ -330,6 +359,22 @@ Status MetricsAccumulator::Finish(MetricsReport* report) {
     if (!report->energy_bias) report->warnings.push_back("energy_bias is undefined: the reference sums to zero");
   }
   if (setup_.with_motion && !warp_.empty()) report->warp_err = warp_.mean();
+  if (sparkle_test_.active()) {
+    SparkleReport sparkles;
+    sparkles.threshold = setup_.sparkle_threshold;
+    sparkles.test = sparkle_test_.Statistics();
+    sparkles.test.motion = sparkle_motion_test_;
+    if (has_ref) {
+      sparkles.reference = sparkle_ref_.Statistics();
+      sparkles.reference->motion = sparkle_motion_ref_;
+    }
+    SetSparkleRatios(&sparkles);
+    if (frames > 1 && sparkle_motion_test_ == "none")
+      report->warnings.push_back(std::string("sparkle lifetimes tracked without motion vectors (") +
+                                 (has_ref ? "neither TEST nor REF has" : "TEST has no") +
+                                 " motion.X/Y): a sparkle that moves is a new birth in every frame it moves");
+    report->sparkles = std::move(sparkles);
+  }
 
   FlickerResult& f = report->flicker;
   f.signal = setup_.signal == FlickerSignal::kError ? "error" : "test";

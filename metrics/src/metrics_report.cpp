@@ -25,6 +25,12 @@ std::string SizeText(int w, int h) { return std::to_string(w) + "x" + std::to_st
 
 Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameObserver& observer) {
   using R = Result<MetricsReport>;
+  if (!(options.sparkle_threshold >= 0) || !std::isfinite(options.sparkle_threshold)) {
+    char given[32];
+    std::snprintf(given, sizeof given, "%g", options.sparkle_threshold);
+    return R::Failure(std::string("sparkle_threshold must be a finite number >= 0 (0: no sparkle statistics), got ") +
+                      given);
+  }
   auto test = OpenSequence(options.test, options.request);
   if (!test) return R::Failure(test.error());
   std::optional<ExrSequence> reference;
@@ -57,6 +63,10 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
     return R::Failure(options.test.string() + ": " + std::to_string(frames) +
                       " frame; temporal metrics need at least 2");
 
+  const bool sparkles = options.sparkle_threshold > 0;
+  // The reference's own motion vectors are read only for the sparkle lifetimes.
+  const bool reference_motion = sparkles && has_ref && reference->has_motion;
+
   const FlickerSignal signal = options.signal.value_or(has_ref ? FlickerSignal::kError : FlickerSignal::kTest);
   if (signal == FlickerSignal::kError && !has_ref) return R::Failure("--signal error needs a reference sequence (REF)");
   const int segment_length =
@@ -69,10 +79,12 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
   // with motion being read and computed. Refused up front, with the numbers,
   // rather than found by the OOM killer on a huge sequence.
   // With a reference, the bootstrap's six float sums per frame block, the
-  // first-frame shifts, and stderr.Y's two sums and its plane.
+  // first-frame shifts, and stderr.Y's two sums and its plane. With sparkle
+  // statistics, two int32 age planes per sequence and the reference's motion.
   const int frame_blocks = (frames + FrameBlockLength(frames) - 1) / FrameBlockLength(frames);
   const double bytes_per_pixel = 3 * 16 + 2 * 8 + 4.0 * segment_length + 2 * (2 * 4 + 8) + 8 +
-                                 (has_ref ? 24.0 * frame_blocks + 8 + 16 + 2 * 4 : 0.0);
+                                 (has_ref ? 24.0 * frame_blocks + 8 + 16 + 2 * 4 : 0.0) +
+                                 (sparkles ? 8.0 * (has_ref ? 2 : 1) + (reference_motion ? 2 * 8 : 0) : 0.0);
   const double needed = bytes_per_pixel * double(width) * double(height);
   if (const double available = double(AvailableHostMemory()); available > 0 && needed > available) {
     char text[256];
@@ -122,6 +134,7 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
   setup.signal = signal;
   setup.segment_length = segment_length;
   setup.reference_stderr = has_ref && reference->has_stderr;
+  setup.sparkle_threshold = options.sparkle_threshold;
   MetricsAccumulator accumulator(setup);
 
   // The next frame pair is read (its chunks decoded in parallel) while this
@@ -134,7 +147,8 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
     if (!tf) return tf.failure();
     pair.test = std::move(*tf);
     if (has_ref) {
-      auto rf = ReadFrame(reference->frames[t], reference->layer, width, height, false, setup.reference_stderr);
+      auto rf = ReadFrame(reference->frames[t], reference->layer, width, height, reference_motion,
+                          setup.reference_stderr);
       if (!rf) return rf.failure();
       pair.reference = std::move(*rf);
     }
@@ -156,7 +170,8 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
     const cv::Mat& T = current->test.luminance;
     const cv::Mat& Rf = current->reference.luminance;
     accumulator.AddFrame(T, Rf, current->test.motion, test->frames[t].string(),
-                         has_ref ? reference->frames[t].string() : std::string(), current->reference.stderr_y);
+                         has_ref ? reference->frames[t].string() : std::string(), current->reference.stderr_y,
+                         current->reference.motion);
     if (observer) {
       Status s =
           observer(ObservedFrame{t, test->fps, has_ref, T, has_ref ? Rf : (t > 0 ? previous.test.luminance : T)});
@@ -218,6 +233,22 @@ nlohmann::json ToJson(const MetricsReport& r) {
                       {"seed", r.bootstrap->seed}};
   if (r.tv_err_floor) j["tv_err_floor"] = *r.tv_err_floor;
   if (r.warp_err) j["warp_err"] = *r.warp_err;
+  if (r.sparkles) {
+    const SparkleReport& s = *r.sparkles;
+    auto statistics = [&](const SparkleStatistics& x) {
+      return json{{"mean_count", x.mean_count},       {"count_variance", x.count_variance},
+                  {"count_cv", optional(x.count_cv)}, {"mean_lifetime", optional(x.mean_lifetime)},
+                  {"birth_rate", optional(x.birth_rate)}, {"motion", x.motion}};
+    };
+    json sparkles = {{"threshold", s.threshold}, {"test", statistics(s.test)}};
+    if (s.reference) {
+      sparkles["reference"] = statistics(*s.reference);
+      sparkles["mean_count_ratio"] = optional(s.mean_count_ratio);
+      sparkles["count_variance_ratio"] = optional(s.count_variance_ratio);
+      sparkles["lifetime_ratio"] = optional(s.lifetime_ratio);
+    }
+    j["sparkles"] = std::move(sparkles);
+  }
   j["flicker"] = {
       {"signal", r.flicker.signal},
       {"segment_length", r.flicker.segment_length},

@@ -11,6 +11,7 @@
 #include "shimmer/core/result.h"
 #include "shimmer/metrics/flicker_spectrum.h"
 #include "shimmer/metrics/metrics_report.h"
+#include "shimmer/metrics/sparkle_statistics.h"
 #include "shimmer/metrics/temporal_variance.h"
 #include "shimmer/metrics/warp_error.h"
 
@@ -27,6 +28,9 @@ struct AccumulatorSetup {
   int segment_length = 0;         // Welch segment, 2..frames
   bool reference_stderr = false;  // every reference frame comes with stderr.Y
   BootstrapSettings bootstrap;
+  // > 0: sparkle statistics with this luminance threshold (docs/metrics.md,
+  // "Sparkle statistics"); 0 leaves them out at no cost.
+  double sparkle_threshold = 0;
 };
 
 class MetricsAccumulator {
@@ -37,9 +41,12 @@ class MetricsAccumulator {
   // reference, `motion` (CV_32FC2) empty without motion. The sources name the
   // frames in the warning about the first NaN or Inf. `reference_stderr`
   // (CV_32F): the reference's per-pixel standard error, with
-  // setup.reference_stderr.
+  // setup.reference_stderr. `reference_motion` (CV_32FC2, may be empty): the
+  // reference's own motion vectors, read only for the sparkle lifetimes; each
+  // side's sparkles are tracked through its own motion, else the other's.
   void AddFrame(const cv::Mat& test, const cv::Mat& reference, const cv::Mat& motion, const std::string& test_source,
-                const std::string& reference_source = {}, const cv::Mat& reference_stderr = cv::Mat());
+                const std::string& reference_source = {}, const cv::Mat& reference_stderr = cv::Mat(),
+                const cv::Mat& reference_motion = cv::Mat());
 
   // Writes every metric, map and flicker result into `report`, and its
   // warnings; fails when every pixel of the region had a non-finite sample.
@@ -73,6 +80,12 @@ class MetricsAccumulator {
   // Per region pixel, with stderr.Y: sum_t s^2, and sum_t (d relmse term / dR)^2 s^2.
   std::vector<double> noise_, relmse_noise_;
   int stderr_frames_ = 0;
+
+  // Sparkle statistics (setup.sparkle_threshold > 0): one tracker per
+  // sequence, and whose motion vectors each followed ("test", "reference",
+  // "none"), as of frame 1.
+  SparkleTracker sparkle_test_, sparkle_ref_;
+  std::string sparkle_motion_test_ = "none", sparkle_motion_ref_ = "none";
 };
 
 }  // namespace shimmer::metrics

@@ -17,6 +17,7 @@
 #include "shimmer/metrics/block_bootstrap.h"
 #include "shimmer/metrics/exr_sequence.h"
 #include "shimmer/metrics/highlight_mask.h"
+#include "shimmer/metrics/sparkle_statistics.h"
 
 namespace shimmer::metrics {
 
@@ -31,6 +32,9 @@ struct MetricsOptions {
   HighlightMaskOptions highlight;
   std::optional<FlickerSignal> signal;  // default: error with a reference, else test
   int segment_length = 0;               // 0: min(N, 64)
+  // > 0: sparkle statistics with this threshold on linear luminance (docs/metrics.md,
+  // "Sparkle statistics"); 0: none (and nothing of them in the report or its JSON).
+  double sparkle_threshold = 0;
 };
 
 // What an observer sees of each frame, in order, as read (luminance).
@@ -80,6 +84,8 @@ struct MetricsReport {
   // With a reference carrying stderr.Y: mean over M and t of stderr.Y^2 over
   // tv_err, in [0, 1]: the share of tv_err the reference's own noise explains.
   std::optional<double> tv_err_floor;
+  // With MetricsOptions::sparkle_threshold > 0.
+  std::optional<SparkleReport> sparkles;
 
   // Per-pixel maps (CV_32F), 0 outside the region and at excluded pixels.
   cv::Mat region_mask;  // CV_8U 0/1, after exclusion of non-finite pixels

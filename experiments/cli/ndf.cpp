@@ -96,6 +96,10 @@ void Run(const NdfOptions& o) {
   if (!user && !info) throw UsageError("unknown variant '" + o.variant + "' (see `shimmer variants`)");
   auto ndf = shading::ParseNdf(o.ndf);
   if (!ndf) throw UsageError("--ndf must be ggx or beckmann, got '" + o.ndf + "'");
+  if (info && info->glints)
+    throw UsageError("variant " + o.variant +
+                     " reads a glint material's texture-space process, not a slope-space footprint; render it "
+                     "(docs/glints.md)");
   if (info && info->ggx_only && *ndf != shading::Ndf::kGgx)
     throw UsageError("variant " + o.variant + " filters GGX only; use --ndf ggx");
   RequireFinite(o.alpha, "--alpha");

@@ -320,6 +320,49 @@ void NormalMapMemorySection(Document& doc, const std::vector<Group>& groups) {
             cells);
 }
 
+// Glint shots (seed 001): what the eye sees of sparkles, beside tv_err. Rows
+// measured with a sparkle threshold only (docs/metrics.md, "Sparkle
+// statistics"); the reference's own statistics once per shot.
+void SparkleSection(Document& doc, const std::vector<Group>& groups) {
+  auto number = [](const nlohmann::json& j, const char* key) {
+    const auto it = j.find(key);
+    return it != j.end() && it->is_number() ? it->get<double>() : kNaN;
+  };
+  std::vector<std::vector<std::string>> cells;
+  double threshold = kNaN;
+  for (const Group& g : groups) {
+    bool reference_row = false;
+    for (const JobResult* r : g.rows) {
+      const auto sp = r->metrics.find("sparkles");
+      if (sp == r->metrics.end() || !sp->is_object()) continue;
+      threshold = number(*sp, "threshold");
+      const nlohmann::json none = nlohmann::json::object();
+      const nlohmann::json& ref = sp->contains("reference") ? (*sp)["reference"] : none;
+      if (!reference_row && !ref.empty()) {
+        cells.push_back({g.Shot(), "reference", Fmt(number(ref, "mean_count"), "%.1f"),
+                         Fmt(number(ref, "count_cv"), "%.3f"), Fmt(number(ref, "mean_lifetime"), "%.2f"), "", "",
+                         ""});
+        reference_row = true;
+      }
+      const nlohmann::json& test = (*sp)["test"];
+      cells.push_back({g.Shot(), Code(r->job.variant), Fmt(number(test, "mean_count"), "%.1f"),
+                       Fmt(number(test, "count_cv"), "%.3f"), Fmt(number(test, "mean_lifetime"), "%.2f"),
+                       Fmt(number(*sp, "mean_count_ratio"), "%.3g"), Fmt(number(*sp, "count_variance_ratio"), "%.3g"),
+                       Fmt(number(*sp, "lifetime_ratio"), "%.3g")});
+    }
+  }
+  if (cells.empty()) return;
+  doc.Heading(2, kSparklesHeading);
+  doc.Paragraph("Sparkles: pixels whose luminance exceeds " + Fmt(threshold) +
+                " in a frame (docs/metrics.md, \"Sparkle statistics\"). Count: sparkle pixels per frame, mean over "
+                "the frames; CV: its standard deviation over time over the mean (how much the number of sparkles "
+                "flickers); lifetime: mean frames a sparkle stays bright, tracked through the motion vectors. "
+                "Ratios are the variant's over the reference's: 1 is the reference's glitter.");
+  doc.Table({"shot", "variant", "count", "count CV", "lifetime", "count ratio", "count variance ratio",
+             "lifetime ratio"},
+            cells);
+}
+
 // Rows whose variant came from a user's file, named once with where the
 // file was and what it held, so that a reader can tell them from the catalogue.
 void UserVariantsSection(Document& doc, const std::vector<Group>& groups) {
@@ -412,6 +455,7 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
   Overview(doc, groups);
   if (sg) SgAccuracySection(doc, *sg);
   NormalMapMemorySection(doc, groups);
+  SparkleSection(doc, groups);
   UserVariantsSection(doc, groups);
   ExternalSequencesSection(doc, groups);
   doc.Heading(2, kShotsHeading);

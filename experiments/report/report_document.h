@@ -48,6 +48,7 @@ inline constexpr const char* kShotsHeading = "Shots";
 inline constexpr const char* kMethodHeading = "Method";
 // Only in reports whose store has external sequences.
 inline constexpr const char* kExternalHeading = "External sequences";
+inline constexpr const char* kSparklesHeading = "Glints: sparkles against the reference";
 inline constexpr const char* kNormalMapMemoryHeading = "Normal maps: memory per texel beside error";
 // Only in reports whose store has a shot lit by an SG light.
 inline constexpr const char* kSgAccuracyHeading = "SG lighting: accuracy of seed 004's approximations";

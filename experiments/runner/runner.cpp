@@ -74,6 +74,7 @@ Result<metrics::MetricsReport> MeasureAgainst(const Job& job, const fs::path& te
     mo.highlight.empty_falls_back_to_frame = true;
   }
   mo.segment_length = job.metrics.segment;
+  mo.sparkle_threshold = job.metrics.sparkle_threshold;
   mo.request.fps = job.fps;  // only where the sequence has no sequence.json to say
   return metrics::ComputeMetrics(mo);
 }

@@ -27,6 +27,8 @@ json Job::ToJson() const {
           {"highlight_mask", metrics.highlight_mask},
           {"highlight_threshold", metrics.highlight_threshold},
           {"segment", metrics.segment}};
+  // Only jobs that measure sparkles carry it, so other jobs' ids stay as they were.
+  if (metrics.sparkle_threshold > 0) j["sparkle_threshold"] = metrics.sparkle_threshold;
   // Only user variants carry these: the ids of built-in jobs stay as they were.
   if (!variant_hash.empty()) {
     j["variant_file"] = variant_file;
@@ -61,6 +63,7 @@ Job Job::FromJson(const json& j) {
   job.metrics.highlight_mask = j.at("highlight_mask");
   job.metrics.highlight_threshold = j.at("highlight_threshold");
   job.metrics.segment = j.at("segment");
+  job.metrics.sparkle_threshold = j.value("sparkle_threshold", 0.0);
   job.variant_file = j.value("variant_file", std::string());
   job.variant_hash = j.value("variant_hash", std::string());
   if (const auto e = j.find("external"); e != j.end() && e->is_object()) {

@@ -648,7 +648,7 @@ Spec ParseSpecObject(const json& j, const std::filesystem::path& base) {
   if (j.contains("metrics")) {
     const json& m = j["metrics"];
     if (!m.is_object()) throw SpecError{"metrics", "must be an object"};
-    RejectUnknownKeys(m, {"highlight_mask", "highlight_threshold", "segment"}, "metrics");
+    RejectUnknownKeys(m, {"highlight_mask", "highlight_threshold", "segment", "sparkle_threshold"}, "metrics");
     if (m.contains("highlight_mask")) {
       if (!m["highlight_mask"].is_boolean()) throw SpecError{"highlight_mask", "must be true or false"};
       s.metrics.highlight_mask = m["highlight_mask"];
@@ -658,6 +658,10 @@ Spec ParseSpecObject(const json& j, const std::filesystem::path& base) {
       if (s.metrics.highlight_threshold <= 0) throw SpecError{"highlight_threshold", "must be > 0"};
     }
     if (m.contains("segment")) s.metrics.segment = PositiveInt(m["segment"], "segment", s.frames);
+    if (m.contains("sparkle_threshold")) {
+      s.metrics.sparkle_threshold = Number(m["sparkle_threshold"], "sparkle_threshold");
+      if (s.metrics.sparkle_threshold < 0) throw SpecError{"sparkle_threshold", "must be >= 0 (0: no sparkle statistics)"};
+    }
   }
   if (j.contains("fit")) {
     const json& f = j["fit"];

@@ -161,7 +161,7 @@ FilteredCentre filteredCentre(SurfaceSample s, vec3 eye, Light light, NormalMapF
   if (s.prim < 0) return o;
   Prim pr = loadPrim(s.prim);
   if (!isMapped(pr)) return o;
-  NormalMapStats st = normalMapStats(pr.map, nf, surfaceUv(pr, s.p));
+  NormalMapStats st = normalMapStats(pr.map, nf, s.uv);  // surfaceWithNormal's uv of this mapped point
   o.s = surfaceWithNormal(pr, s.prim, s.p, eye, light, mappedNormal(pr, s.p, normalMapNormal(nf.mode, st)));
   o.lobe = normalMapLobe(nf.mode, st, alpha, scale);
   return o;

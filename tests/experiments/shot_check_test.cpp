@@ -84,5 +84,24 @@ TEST(ShotCheck, TheReferencesOwnNoiseIsTakenOutOfTvErr) {
   EXPECT_TRUE(still.converged);
 }
 
+// The same noise is part of the reference's own temporal variance: a
+// glint-plane reference (vr-jitter, 8 x 8 samples) whose tv_ref fell by 30 %
+// at 16 x 16, all of it F, converges; a tv_ref that moves beyond its noise
+// does not.
+TEST(ShotCheck, TheReferencesOwnNoiseIsTakenOutOfTvRef) {
+  ShotCheck sparkly = Measured(1.0, 0.695, 0.0, 0.0, 0.5, 0.5);
+  JudgeConvergence(sparkly);
+  EXPECT_FALSE(sparkly.converged);
+  sparkly.tv_err_noise = 0.39;
+  sparkly.tv_err_noise_check = 0.087;
+  JudgeConvergence(sparkly);
+  EXPECT_NEAR(sparkly.d_tv_ref, std::abs(0.608 / 0.61 - 1), 1e-12);
+  EXPECT_TRUE(sparkly.converged);
+  ShotCheck moving = sparkly;
+  moving.tv_ref_check = 0.5;
+  JudgeConvergence(moving);
+  EXPECT_FALSE(moving.converged);
+}
+
 }  // namespace
 }  // namespace shimmer::experiments

@@ -39,6 +39,7 @@ Params<T> DefaultParams(const VariantInfo& v) {
 }
 
 std::vector<Ndf> NdfsOf(const VariantInfo& v) {
+  if (v.glints) return {};  // glints.glsl, tested in glints_test.cpp
   if (v.ggx_only) return {Ndf::kGgx};
   return {Ndf::kGgx, Ndf::kBeckmann, Ndf::kBlinnPhong};
 }

@@ -57,6 +57,9 @@ struct MetricOptions {
   // stays well below 1.
   double highlight_threshold = 0.1;
   int segment = 0;  // Welch segment length; 0: min(frames, 64)
+  // Luminance above which a pixel is a sparkle (docs/metrics.md, "Sparkle
+  // statistics"); 0: no sparkle statistics.
+  double sparkle_threshold = 0;
 };
 
 struct FitWeights {

@@ -134,8 +134,10 @@ void AddRenderCommand(CLI::App& app) {
   cmd->footer(
       "Material spec: NDF:ALPHA[,ALPHA_Y][,f0=V|R/G/B][,albedo=V|R/G/B]\n"
       "  e.g. ggx:0.05   beckmann:0.02,0.1   ggx:0.1,f0=0.9/0.6/0.3,albedo=0   blinn-phong:200 (a power)\n"
+      "  glints:ALPHA[,ALPHA_Y][,local=ALPHA_L][,density=N]: glints (docs/glints.md), e.g. glints:0.3,local=0.03\n"
       "Scenes: sphere, sphere-field, wires, bumpy-plane, sg-sphere-field, sg-plane, sg-bumpy-plane,\n"
-      "  nm-plane, nm-sphere, nm-magnify (normal-mapped), or a JSON file (docs/scenes.md).\n"
+      "  nm-plane, nm-sphere, nm-magnify (normal-mapped), glint-plane, glint-sphere (glints),\n"
+      "  or a JSON file (docs/scenes.md).\n"
       "Camera paths: orbit, pan, dolly, vr-jitter, static.\n"
       "Output: DIR/frame_NNNN.exr (R,G,B, specular.*, diffuse.*, motion.X/Y, depth.Z, normal.*,\n"
       "  roughness.A, footprint.X/Y, stderr.Y for the reference) and DIR/sequence.json.");

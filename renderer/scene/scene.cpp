@@ -666,6 +666,19 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
   return s;
 }
 
+namespace {
+// The whole of `text` as one finite number.
+bool WholeFiniteNumber(const std::string& text, double* out) {
+  std::size_t used = 0;
+  try {
+    *out = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return false;
+  }
+  return used != 0 && used == text.size() && std::isfinite(*out);
+}
+}  // namespace
+
 Result<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading::MaterialDesc& base) {
   using R = Result<shading::MaterialDesc>;
   const std::string usage =
@@ -689,20 +702,15 @@ Result<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading
   while (std::getline(ss, item, ',')) {
     auto eq = item.find('=');
     if (eq == std::string::npos) {
-      std::size_t used = 0;
       double a = 0;
-      try {
-        a = std::stod(item, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
+      const bool number = WholeFiniteNumber(item, &a);
       if (power) {
-        if (used == 0 || used != item.size() || !std::isfinite(a) || a < 0 || a > 1e8)
+        if (!number || a < 0 || a > 1e8)
           return R::Failure("material '" + std::string(spec) + "': Blinn-Phong power '" + item +
                             "' must be a number in [0, 1e8]");
         a = shading::BlinnPhongAlpha(a);
       }
-      if (used == 0 || used != item.size() || !std::isfinite(a) || a <= 0 || a > 1)
+      if (!number || a <= 0 || a > 1)
         return R::Failure("material '" + std::string(spec) + "': roughness '" + item + "' must be a number in (0, 1]");
       if (alphas.size() == 2)
         return R::Failure("material '" + std::string(spec) + "': at most two roughness values" + usage);
@@ -713,15 +721,8 @@ Result<shading::MaterialDesc> ParseMaterial(std::string_view spec, const shading
     if (key == "local" || key == "density") {
       if (!glints)
         return R::Failure("material '" + std::string(spec) + "': '" + key + "' is a glint material's field (glints:...)");
-      std::size_t used = 0;
       double v = 0;
-      try {
-        v = std::stod(value, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      const bool ok = used != 0 && used == value.size() && std::isfinite(v) &&
-                      (key == "local" ? v > 0 && v <= 1 : v > 0 && v <= kMaxGlintDensity);
+      const bool ok = WholeFiniteNumber(value, &v) && (key == "local" ? v > 0 && v <= 1 : v > 0 && v <= kMaxGlintDensity);
       if (!ok)
         return R::Failure("material '" + std::string(spec) + "': " + key + " '" + value + "' must be a number in " +
                           (key == "local" ? "(0, 1]" : "(0, 1e12]"));

@@ -586,7 +586,7 @@ TEST(RunCli, FilteredGlintsFlickerLessThanTheNaiveSparkleUnderDolly) {
     "metrics": {"highlight_mask": false, "sparkle_threshold": 4}
   })";
   ASSERT_EQ(std::system(("cd " + dir.string() + " && " + SHIMMER_EXE +
-                         " run glints.json --no-check --db g.db --work g >log.txt 2>&1")
+                         " run glints.json --no-check --no-benchmark --db g.db --work g >log.txt 2>&1")
                             .c_str()),
             0);
   auto store = ResultStore::Open((dir / "g.db").string(), ResultStore::Mode::kReadOnly);

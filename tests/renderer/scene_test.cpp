@@ -42,6 +42,36 @@ TEST(Material, RejectsBadSpecsWithAMessage) {
   }
 }
 
+// Glint materials (docs/glints.md): D_m's alpha, the local lobe and the
+// density, with defaults, a round trip through MaterialSpec, and the glint
+// fields refused elsewhere or out of range.
+TEST(Material, ParsesGlintMaterials) {
+  shading::MaterialDesc base;
+  auto d = ParseMaterial("glints:0.3", base);
+  ASSERT_TRUE(d.ok()) << d.error();
+  EXPECT_EQ(d->ndf, shading::Ndf::kGlints);
+  EXPECT_DOUBLE_EQ(d->glint_alpha_l, 0.03);
+  EXPECT_DOUBLE_EQ(d->glint_density, 1e4);
+  auto m = ParseMaterial("glints:0.2,0.4,local=0.05,density=2.5e5,albedo=0.1", base);
+  ASSERT_TRUE(m.ok()) << m.error();
+  EXPECT_DOUBLE_EQ(m->alpha.y, 0.4);
+  EXPECT_DOUBLE_EQ(m->glint_alpha_l, 0.05);
+  EXPECT_DOUBLE_EQ(m->glint_density, 2.5e5);
+  auto round_trip = ParseMaterial(MaterialSpec(*m), base);
+  ASSERT_TRUE(round_trip.ok()) << round_trip.error();
+  EXPECT_DOUBLE_EQ(round_trip->glint_density, 2.5e5);
+  EXPECT_DOUBLE_EQ(round_trip->glint_alpha_l, 0.05);
+  auto smooth = ParseMaterial("ggx:0.1,density=5", base);
+  ASSERT_FALSE(smooth.ok());
+  EXPECT_NE(smooth.error().find("glint material's field"), std::string::npos) << smooth.error();
+  for (const char* bad : {"glints:0.3,local=0", "glints:0.3,local=2", "glints:0.3,density=-1", "glints:0.3,density=x",
+                          "glints:0.3,density=1e13"}) {
+    auto r = ParseMaterial(bad, base);
+    EXPECT_FALSE(r.ok()) << bad;
+    EXPECT_NE(r.error().find("must be a number in"), std::string::npos) << r.error();
+  }
+}
+
 TEST(SceneJson, LoadsPrimitivesLightMaterialCamera) {
   auto s = ParseSceneJson(R"({"name": "two", "primitives": [
       {"type": "sphere", "center": [0, 1, 0], "radius": 0.5},

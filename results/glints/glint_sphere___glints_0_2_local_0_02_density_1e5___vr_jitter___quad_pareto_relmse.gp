@@ -1,0 +1,12 @@
+set terminal svg size 900,560 dynamic noenhanced
+set output 'glint_sphere___glints_0_2_local_0_02_density_1e5___vr_jitter___quad_pareto_relmse.svg'
+set title 'glint-sphere / glints:0.2,local=0.02,density=1e5 / vr-jitter / quad: speed against relmse'
+set xlabel 'benchmark GPU ms per frame'
+set ylabel 'relmse'
+set logscale y
+set key outside right top font ',9'
+plot 'glint_sphere___glints_0_2_local_0_02_density_1e5___vr_jitter___quad_pareto.dat' index 0 using 1:3 with points pt 7 lc rgb '#1f77b4' title 'variants', \
+     'glint_sphere___glints_0_2_local_0_02_density_1e5___vr_jitter___quad_front_relmse.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
+     'glint_sphere___glints_0_2_local_0_02_density_1e5___vr_jitter___quad_front_relmse.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
+     'glint_sphere___glints_0_2_local_0_02_density_1e5___vr_jitter___quad_pareto.dat' index 1 using 1:3 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
+     keyentry with points pt 6 lc rgb '#d62728' title '1: glints-smooth'

@@ -25,14 +25,15 @@ nlohmann::json CatalogueJson() {
                     {"source", v.source},
                     {"params", params},
                     {"widens_roughness", v.widens_roughness},
-                    {"ndf", v.ggx_only ? "ggx" : "any"}});
+                    {"ndf", v.glints ? "glints" : v.ggx_only ? "ggx" : "any"}});
   }
   return list;
 }
 
 void PrintCatalogue() {
   for (const shading::VariantInfo& v : shading::Variants()) {
-    std::printf("%s%s\n", std::string(v.name).c_str(), v.ggx_only ? "  [GGX materials only]" : "");
+    std::printf("%s%s\n", std::string(v.name).c_str(),
+                v.glints ? "  [glint materials only]" : v.ggx_only ? "  [GGX materials only]" : "");
     std::printf("    %s\n", std::string(v.summary).c_str());
     for (const shading::ParamInfo& p : v.params)
       std::printf("    --param %s=%g  %s\n", std::string(p.name).c_str(), p.default_value,

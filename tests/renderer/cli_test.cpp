@@ -170,7 +170,7 @@ TEST(GpuCli, BadInputGetsOneMessageAndNoFrames) {
   ExpectOneClearError(Shimmer(base + "--variant no-such-variant"), "unknown variant 'no-such-variant'");
   ExpectOneClearError(Shimmer(base + "--variant tk19 --param fp_max=1"), "has no parameter 'fp_max'");
   ExpectOneClearError(Shimmer(base + "--variant tk19 --param sigma2=abc"), "is not a finite number");
-  ExpectOneClearError(Shimmer(base + "--material phong:0.1"), "NDF must be ggx, beckmann or blinn-phong");
+  ExpectOneClearError(Shimmer(base + "--material phong:0.1"), "NDF must be ggx, beckmann, blinn-phong or glints");
   ExpectOneClearError(Shimmer(base + "--material blinn-phong:-3"),
                       "Blinn-Phong power '-3' must be a number in [0, 1e8]");
   ExpectOneClearError(Shimmer(base + "--variant toksvig"), "filters normal maps, and scene");

@@ -12,4 +12,6 @@ plot 'nm_plane___ggx_0_05___orbit___quad_pareto.dat' index 0 using 1:3 with poin
      keyentry with points pt 6 lc rgb '#d62728' title '1: tk19', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: none', \
      keyentry with points pt 6 lc rgb '#d62728' title '3: vmf', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: nm-mip'
+     keyentry with points pt 6 lc rgb '#d62728' title '4: toksvig-map', \
+     keyentry with points pt 6 lc rgb '#d62728' title '5: supersample-2', \
+     keyentry with points pt 6 lc rgb '#d62728' title '6: nm-mip'

@@ -324,10 +324,7 @@ void NormalMapMemorySection(Document& doc, const std::vector<Group>& groups) {
 // measured with a sparkle threshold only (docs/metrics.md, "Sparkle
 // statistics"); the reference's own statistics once per shot.
 void SparkleSection(Document& doc, const std::vector<Group>& groups) {
-  auto number = [](const nlohmann::json& j, const char* key) {
-    const auto it = j.find(key);
-    return it != j.end() && it->is_number() ? it->get<double>() : kNaN;
-  };
+  const auto number = Metric;  // any key of the metrics JSON, NaN when absent
   std::vector<std::vector<std::string>> cells;
   double threshold = kNaN;
   for (const Group& g : groups) {

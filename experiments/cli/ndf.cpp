@@ -59,7 +59,8 @@ void RequireRepresentable(const std::vector<double>& values, const char* option,
 // d hpp / dx = (2 FX, 0), d hpp / dy = (0, 2 FY) give rect half-sides exactly
 // (FX, FY); normal-based variants see dn/dx = (2 FX, 0, 0), dn/dy = (0, 2 FY, 0)
 // (at normal incidence a normal tilt moves the slope-space half vector by the
-// same amount, to first order).
+// same amount, to first order); tk19-forward sees the projected half vector's
+// derivatives chained from the slope's, as an analytic footprint has them.
 template <class T>
 shading::Footprint<T> FootprintOf(const NdfOptions& o) {
   shading::Footprint<T> f;
@@ -71,7 +72,7 @@ shading::Footprint<T> FootprintOf(const NdfOptions& o) {
   f.dn_dy = {T(0), T(2) * fy, T(0)};
   f.dng_dx = f.dn_dx;
   f.dng_dy = f.dn_dy;
-  return f;
+  return shading::WithChainedProjection(f);
 }
 
 template <class T>

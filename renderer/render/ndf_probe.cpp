@@ -20,12 +20,12 @@ Result<shading::FilteredNdf<double>> ProbeNdf(const NdfProbe& probe) {
   // the constants into a module first.
   auto pipeline = AcquirePipeline(*device, *kernel, specialization, bindings, 0, nullptr, /*driver_specializes=*/true);
   if (!pipeline) return pipeline.failure();
-  auto buffer = device->context->CreateBuffer(10 * 4 * sizeof(float));
+  auto buffer = device->context->CreateBuffer(11 * 4 * sizeof(float));
   if (!buffer) return buffer.failure();
   const shading::Footprint<double>& f = probe.footprint;
   const shading::Params<double>& p = probe.params;
-  // The layout ndf_probe.comp reads: words 0..8.
-  const double in[9][4] = {{f.hpp.x, f.hpp.y, probe.alpha.x, probe.alpha.y},
+  // The layout ndf_probe.comp reads: words 0..9.
+  const double in[10][4] = {{f.hpp.x, f.hpp.y, probe.alpha.x, probe.alpha.y},
                            {f.dhpp_dx.x, f.dhpp_dx.y, f.dhpp_dy.x, f.dhpp_dy.y},
                            {f.n.x, f.n.y, f.n.z, double(int(probe.ndf))},
                            {f.dn_dx.x, f.dn_dx.y, f.dn_dx.z, 0},
@@ -33,18 +33,19 @@ Result<shading::FilteredNdf<double>> ProbeNdf(const NdfProbe& probe) {
                            {f.dng_dx.x, f.dng_dx.y, f.dng_dx.z, 0},
                            {f.dng_dy.x, f.dng_dy.y, f.dng_dy.z, 0},
                            {p.fp_max, p.fp_min_cap, p.sigma2, p.kappa},
-                           {p.nm_scale, p.curvature_scale, p.curvature_bias, p.curvature_exponent}};
+                           {p.nm_scale, p.curvature_scale, p.curvature_bias, p.curvature_exponent},
+                           {f.dh_dx.x, f.dh_dx.y, f.dh_dy.x, f.dh_dy.y}};
   auto* words = static_cast<float*>((*buffer)->data());
-  for (int i = 0; i < 9; ++i)
+  for (int i = 0; i < 10; ++i)
     for (int c = 0; c < 4; ++c) words[4 * i + c] = float(in[i][c]);
-  for (int c = 0; c < 4; ++c) words[36 + c] = 0;
+  for (int c = 0; c < 4; ++c) words[40 + c] = 0;
   vk::Buffer* buffers[] = {buffer->get()};
   if (auto done = device->context->Dispatch(**pipeline, buffers, {}, 1, 1); !done)
     return Prefixed("ndf probe", done.failure());
   shading::FilteredNdf<double> r;
-  r.slope_density = words[36];
-  r.density = words[37];
-  r.alpha_eff = {words[38], words[39]};
+  r.slope_density = words[40];
+  r.density = words[41];
+  r.alpha_eff = {words[42], words[43]};
   return r;
 }
 

@@ -9,7 +9,7 @@
 layout(local_size_x = 1) in;
 layout(constant_id = 0) const int VARIANT_ID = 0;
 
-// In: words 0..8 as ndf_probe.cpp writes them; out: word 9.
+// In: words 0..9 as ndf_probe.cpp writes them; out: word 10.
 layout(std430, binding = 0) buffer ProbeBuf { vec4 words[]; } probe;
 
 #include "core.glsl"
@@ -40,10 +40,12 @@ void main() {
   p.curvature_scale = probe.words[8].y;
   p.curvature_bias = probe.words[8].z;
   p.curvature_exponent = probe.words[8].w;
+  f.dh_dx = probe.words[9].xy;
+  f.dh_dy = probe.words[9].zw;
 #ifdef SHIMMER_USER_VARIANT
   FilteredNdf r = userVariant(ndf, alpha, f, userParams(p));
 #else
   FilteredNdf r = evalVariant(VARIANT_ID, ndf, alpha, f, p);
 #endif
-  probe.words[9] = vec4(r.slope_density, r.density, r.alpha_eff);
+  probe.words[10] = vec4(r.slope_density, r.density, r.alpha_eff);
 }

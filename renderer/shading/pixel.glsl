@@ -203,6 +203,9 @@ ShadingFootprint quadFootprint(SurfaceSample s, SurfaceSample x0, SurfaceSample 
   f.n = s.n;
   f.dhpp_dx = x1.hpp - x0.hpp;
   f.dhpp_dy = y1.hpp - y0.hpp;
+  // TK19's forward kernel differences h.xy itself, not the slope.
+  f.dh_dx = projectedHalfVector(x1.hpp) - projectedHalfVector(x0.hpp);
+  f.dh_dy = projectedHalfVector(y1.hpp) - projectedHalfVector(y0.hpp);
   f.dn_dx = x1.n - x0.n;
   f.dn_dy = y1.n - y0.n;
   f.dng_dx = x1.ng - x0.ng;
@@ -232,6 +235,8 @@ ShadingFootprint zeroFootprint(SurfaceSample s) {
   f.n = s.n;
   f.dhpp_dx = vec2(real(0), real(0));
   f.dhpp_dy = f.dhpp_dx;
+  f.dh_dx = f.dhpp_dx;
+  f.dh_dy = f.dhpp_dx;
   f.dn_dx = z;
   f.dn_dy = z;
   f.dng_dx = z;
@@ -295,6 +300,8 @@ ShadingFootprint analyticFootprintFiltered(SurfaceSample s, Ray r, Light light, 
   f.dng_dy = geometricNormalDeriv(pr, s.p, dpy);
   f.dhpp_dx = hppDerivative(s, pr, light, dpx, f.dn_dx);
   f.dhpp_dy = hppDerivative(s, pr, light, dpy, f.dn_dy);
+  f.dh_dx = projectedHalfVectorChange(s.hpp, f.dhpp_dx);
+  f.dh_dy = projectedHalfVectorChange(s.hpp, f.dhpp_dy);
   return f;
 }
 
@@ -465,6 +472,8 @@ ShadingFootprint turnedFootprint(ShadingFootprint f, real angle) {
   f.hpp = turnedSlope(f.hpp, c, sn);
   f.dhpp_dx = turnedSlope(f.dhpp_dx, c, sn);
   f.dhpp_dy = turnedSlope(f.dhpp_dy, c, sn);
+  f.dh_dx = turnedSlope(f.dh_dx, c, sn);
+  f.dh_dy = turnedSlope(f.dh_dy, c, sn);
   return f;
 }
 

@@ -118,6 +118,8 @@ FilteredNdf<T> EvaluateVariant(int id, Ndf ndf, glm::vec<2, T> alpha, const Foot
   f.hpp = footprint.hpp;
   f.dhpp_dx = footprint.dhpp_dx;
   f.dhpp_dy = footprint.dhpp_dy;
+  f.dh_dx = footprint.dh_dx;
+  f.dh_dy = footprint.dh_dy;
   f.n = footprint.n;
   f.dn_dx = footprint.dn_dx;
   f.dn_dy = footprint.dn_dy;
@@ -280,7 +282,7 @@ auto FlatSgPoint(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3,
   p.alphaEff = p.alpha;
   p.f0 = f0;
   p.f.hpp = glm::vec<2, T>(0);
-  p.f.dhpp_dx = p.f.dhpp_dy = glm::vec<2, T>(0);
+  p.f.dhpp_dx = p.f.dhpp_dy = p.f.dh_dx = p.f.dh_dy = glm::vec<2, T>(0);
   p.f.n = normal;
   p.f.dn_dx = p.f.dn_dy = p.f.dng_dx = p.f.dng_dy = glm::vec<3, T>(0);
   p.vp.fp_max = 1;
@@ -489,7 +491,8 @@ PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc&
   o.diffuse = r.shade.diffuse;
   o.alpha_eff = r.shade.alphaEff;
   o.footprint = r.shade.footprint;
-  o.derivatives = {r.f.hpp, r.f.dhpp_dx, r.f.dhpp_dy, r.f.n, r.f.dn_dx, r.f.dn_dy, r.f.dng_dx, r.f.dng_dy};
+  o.derivatives = {r.f.hpp,    r.f.dhpp_dx, r.f.dhpp_dy, r.f.n,    r.f.dn_dx,
+                   r.f.dn_dy, r.f.dng_dx,  r.f.dng_dy,  r.f.dh_dx, r.f.dh_dy};
   return o;
 }
 
@@ -506,6 +509,8 @@ bool CatalogueMatchesGlsl() {
       {"k16-ggx-rect-jacobian", VARIANT_K16_GGX_RECT_JACOBIAN},
       {"k16-ggx-proxy", VARIANT_K16_GGX_PROXY},
       {"tk19", VARIANT_TK19},
+      {"tk19-forward", VARIANT_TK19_FORWARD},
+      {"tk19-forward-rect", VARIANT_TK19_FORWARD_RECT},
       {"tk21", VARIANT_TK21},
       {"filament", VARIANT_FILAMENT},
       {"unity-hdrp", VARIANT_UNITY_HDRP},

@@ -27,7 +27,12 @@ const int VARIANT_ASG_WARP_K16 = 17;
 const int VARIANT_GLINTS_ZK16 = 18;
 const int VARIANT_GLINTS_NAIVE = 19;
 const int VARIANT_GLINTS_SMOOTH = 20;
-const int VARIANT_COUNT = 21;
+// Tokuyoshi and Kaplanyan 2019 for forward rendering: the kernel from the
+// derivatives of the projected half vector, non-axis-aligned and as the
+// bounding rectangle.
+const int VARIANT_TK19_FORWARD = 21;
+const int VARIANT_TK19_FORWARD_RECT = 22;
+const int VARIANT_COUNT = 23;
 
 // A variant id is a geometric filter above plus NMF_STRIDE times a
 // normal-map filter (NMF_* of normal_map.glsl; 0 for the variants above):
@@ -49,6 +54,8 @@ struct ShadingFootprint {
   vec2 hpp;      // slope-space half vector h.xy / h.z in the shading tangent frame (seed 000)
   vec2 dhpp_dx;  // d hpp / d screen x
   vec2 dhpp_dy;
+  vec2 dh_dx;    // d h.xy / d screen x: the projected half vector's derivatives (TK19 forward)
+  vec2 dh_dy;
   vec3 n;        // unit shading normal
   vec3 dn_dx;    // derivatives of the shading normal
   vec3 dn_dy;
@@ -108,9 +115,10 @@ vec2 k16RectAlpha2(vec2 alpha, ShadingFootprint f, real fpMax) {
 
 // Seed 000, "Filtering Beckmann" with the full parallelogram: R' = R + 2 C,
 // C = U U^T. U holds the two propagated standard-deviation vectors of the
-// 0.5 px Gaussian pixel filter, i.e. half of the per-pixel derivatives; with
-// that scale the parallelogram and the rect agree on axis-aligned footprints
-// (the slide's bare U = dh/duv would widen four times as much).
+// Gaussian pixel filter of variance sigma2 px^2: sqrt(sigma2) times the
+// per-pixel derivatives. At the default sigma2 = 1/4 (0.5 px) the
+// parallelogram and the rect agree on axis-aligned footprints; sigma2 = 1 is
+// the slide's bare U = dh/duv, which widens four times as much.
 //
 // det R' and the form s^T adj(R') s are written as sums of squares (adj is
 // linear on 2x2 matrices and adj(U U^T) = adj(U)^T adj(U)):
@@ -122,9 +130,10 @@ vec2 k16RectAlpha2(vec2 alpha, ShadingFootprint f, real fpMax) {
 // lobe (seed 000_16155bfd1e3ea941.txt gives R' only, not how to evaluate it).
 real cross2(vec2 a, vec2 b) { return a.x * b.y - a.y * b.x; }
 
-FilteredNdf k16Parallelogram(int ndf, vec2 alpha, ShadingFootprint f) {
-  vec2 ux = real(0.5) * f.dhpp_dx;
-  vec2 uy = real(0.5) * f.dhpp_dy;
+FilteredNdf k16Parallelogram(int ndf, vec2 alpha, ShadingFootprint f, real sigma2) {
+  real u = sqrt(max(sigma2, real(0)));
+  vec2 ux = u * f.dhpp_dx;
+  vec2 uy = u * f.dhpp_dy;
   vec2 s = clampSlope(f.hpp);
   real ax2 = alpha.x * alpha.x;
   real ay2 = alpha.y * alpha.y;
@@ -190,6 +199,76 @@ vec2 tk19Alpha2(vec2 alpha, real spread, real sigma2, real kappa) {
   return vec2(sat(a2.x), sat(a2.y));
 }
 
+// Tokuyoshi and Kaplanyan, "Improved Geometric Specular Antialiasing" (I3D
+// 2019), forward rendering. Seed 000's kernel is a Gaussian in slope space
+// whose bandwidth comes from the screen derivatives of the slope h.xy / h.z;
+// where h.z is small (grazing angles, silhouettes) a finite difference of the
+// slope is dominated by its error. The paper takes the bandwidth from the
+// derivatives of the projected half vector h.xy instead, which stays in the
+// unit disk: Sigma = sigma2 (dx dx^T + dy dy^T) with dx = d h.xy / d screen x,
+// the kernel roughness 2 Sigma clamped to kappa, added to the roughness
+// matrix (alpha^2 on its diagonal) and the NDF evaluated with the result, not
+// axis-aligned in general. The paper's deferred form is `tk19`.
+//
+// The paper clamps a scalar kernel, min(2 sigma2 x, kappa); the matrix is
+// clamped here in its eigenvalues, which is the same on each axis of a
+// diagonal kernel and does not depend on the tangent frame. With the kernel
+// K = 2 Sigma, lambda+- its eigenvalues, the clamped kernel is mu I + c K:
+//   (mu, c) = (0, 1)                          lambda+ <= kappa,
+//           = ((1 - c) lambda-, (kappa - lambda-) / (lambda+ - lambda-))
+//                                             lambda- < kappa < lambda+,
+//           = (kappa, 0)                      lambda- >= kappa,
+// which keeps the smaller eigenvalue and its axis. det and s^T adj s are then
+// sums of non-negative terms (adj is linear on 2x2 matrices), as in
+// k16Parallelogram, so a nearly rank-one kernel does not cancel in float.
+FilteredNdf tk19Forward(int ndf, vec2 alpha, ShadingFootprint f, real sigma2, real kappa) {
+  real w = real(2) * max(sigma2, real(0));
+  vec2 dx = f.dh_dx;
+  vec2 dy = f.dh_dy;
+  real kxx = w * (dx.x * dx.x + dy.x * dy.x);
+  real kyy = w * (dx.y * dx.y + dy.y * dy.y);
+  real kxy = w * (dx.x * dx.y + dy.x * dy.y);
+  real cr = cross2(dx, dy);
+  real detK = w * w * cr * cr;
+  real mid = real(0.5) * (kxx + kyy);
+  real lmax = mid + sqrt(sqr(real(0.5) * (kxx - kyy)) + kxy * kxy);
+  real lmin = lmax > real(0) ? detK / lmax : real(0);
+  real mu = real(0);
+  real c = real(1);
+  if (lmin >= kappa) {
+    mu = kappa;
+    c = real(0);
+  } else if (lmax > kappa) {
+    c = (kappa - lmin) / (lmax - lmin);
+    mu = (real(1) - c) * lmin;
+  }
+  vec2 s = clampSlope(f.hpp);
+  real ax2 = alpha.x * alpha.x;
+  real ay2 = alpha.y * alpha.y;
+  real rxx = ax2 + mu + c * kxx;
+  real ryy = ay2 + mu + c * kyy;
+  real detKc = mu * mu + mu * c * (kxx + kyy) + c * c * detK;
+  real det = ax2 * ay2 + ay2 * (mu + c * kxx) + ax2 * (mu + c * kyy) + detKc;
+  real cx = cross2(s, dx);
+  real cy = cross2(s, dy);
+  real form = ay2 * s.x * s.x + ax2 * s.y * s.y + mu * dot(s, s) + c * w * (cx * cx + cy * cy);
+  FilteredNdf o;
+  o.alpha_eff = sqrt(vec2(rxx, ryy));
+  o.slope_density = slopeDensityQuadratic(ndf, form / det, det);
+  o.density = o.slope_density * slopeToSolidAngle(s);
+  return o;
+}
+
+// The same paper's axis-aligned form: the kernel from the bounding rectangle
+// |dx| + |dy| of the projected half vector's derivatives, per axis,
+// alpha'^2 = sat(alpha^2 + min(2 sigma2 b^2, kappa)).
+vec2 tk19ForwardRectAlpha2(vec2 alpha, ShadingFootprint f, real sigma2, real kappa) {
+  vec2 b = abs(f.dh_dx) + abs(f.dh_dy);
+  vec2 k = min(real(2) * sigma2 * b * b, vec2(kappa, kappa));
+  vec2 a2 = alpha * alpha + k;
+  return vec2(sat(a2.x), sat(a2.y));
+}
+
 // Tokuyoshi and Kaplanyan, "Stable Geometric Specular Antialiasing with
 // Projected-Space NDF Filtering" (JCGT 2021): p = alpha^2 / (1 - alpha^2),
 // p' = p + min(sigma2 S, kappa), alpha'^2 = p' / (1 + p'). Written as
@@ -226,18 +305,37 @@ real sgFootprintVariance(ShadingFootprint f, real fpMax) {
 // 1e4 does; capping them keeps squared covariances finite in float.
 const real FOOTPRINT_MAX = real(1e4);
 
+// The projected half vector h.xy of the slope s = h.xy / h.z (h.z > 0), and
+// the change of h.xy for a change ds of the slope:
+// d h.xy = (ds - s (s . ds) / q) / sqrt(q), q = 1 + |s|^2, with ds capped
+// as evalVariant caps the slope's derivatives.
+vec2 projectedHalfVector(vec2 s) {
+  s = clampSlope(s);
+  return s * inversesqrt(real(1) + dot(s, s));
+}
+vec2 projectedHalfVectorChange(vec2 s, vec2 ds) {
+  s = clampSlope(s);
+  ds = clamp(ds, vec2(-FOOTPRINT_MAX, -FOOTPRINT_MAX), vec2(FOOTPRINT_MAX, FOOTPRINT_MAX));
+  real q = real(1) + dot(s, s);
+  return (ds - s * (dot(s, ds) / q)) * inversesqrt(q);
+}
+
 FilteredNdf evalVariant(int variant, int ndf, vec2 alpha, ShadingFootprint f, VariantParams p) {
   variant = geometricVariant(variant);
   alpha = clampAlpha(alpha);
   vec2 lim = vec2(FOOTPRINT_MAX, FOOTPRINT_MAX);
   f.dhpp_dx = clamp(f.dhpp_dx, -lim, lim);
   f.dhpp_dy = clamp(f.dhpp_dy, -lim, lim);
+  f.dh_dx = clamp(f.dh_dx, -lim, lim);
+  f.dh_dy = clamp(f.dh_dy, -lim, lim);
   vec2 hpp = clampSlope(f.hpp);
   if (variant == VARIANT_VLACHOS15) return widenedNdf(ndf, hpp, vlachosAlpha2(alpha, f, p));
   if (variant == VARIANT_TOKSVIG_QUAD) return widenedNdf(ndf, hpp, toksvigAlpha2(alpha, f));
   if (variant == VARIANT_K16_BECKMANN_RECT || variant == VARIANT_K16_GGX_PROXY)
     return widenedNdf(ndf, hpp, k16RectAlpha2(alpha, f, p.fp_max));
-  if (variant == VARIANT_K16_BECKMANN_PARALLELOGRAM) return k16Parallelogram(ndf, alpha, f);
+  if (variant == VARIANT_K16_BECKMANN_PARALLELOGRAM) return k16Parallelogram(ndf, alpha, f, p.sigma2);
+  if (variant == VARIANT_TK19_FORWARD) return tk19Forward(ndf, alpha, f, p.sigma2, p.kappa);
+  if (variant == VARIANT_TK19_FORWARD_RECT) return widenedNdf(ndf, hpp, tk19ForwardRectAlpha2(alpha, f, p.sigma2, p.kappa));
   if (variant == VARIANT_K16_GGX_RECT) {
     // Seed 000 as published: footprint clamped to [min(alpha, 0.1), fp_max]
     // and the Jacobian 1 / max(1e-3, h.z^4). Where the formula cancels to a

@@ -125,7 +125,8 @@ using shading::DerivativeSource;
 TEST(GpuOracle, SphereAllDerivativeSources) {
   for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kQuadCoarse, DerivativeSource::kAnalytic})
     for (const char* v :
-         {"none", "tk19", "k16-ggx-rect-stable", "k16-ggx-rect-jacobian", "k16-beckmann-parallelogram", "vlachos15"})
+         {"none", "tk19", "k16-ggx-rect-stable", "k16-ggx-rect-jacobian", "k16-beckmann-parallelogram", "vlachos15",
+          "tk19-forward", "tk19-forward-rect"})
       ExpectMatchesOracle("sphere", v, d);
 }
 

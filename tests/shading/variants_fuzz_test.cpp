@@ -163,6 +163,14 @@ class InputGenerator {
       const glm::vec<2, T> limit(T(1e20));
       f.hpp = glm::clamp(f.dhpp_dx * (Alpha(b[10]) * T((shape & 0x1000) ? -1e6 : 1e6)), -limit, limit);
     }
+    // tk19-forward's projected derivatives: chained as an analytic footprint
+    // has them, or raw (a quad difference is at most 2, raw values test the caps).
+    if (shape & 0x2000) {
+      f = WithChainedProjection(f);
+    } else {
+      f.dh_dx = f.dhpp_dx;
+      f.dh_dy = f.dhpp_dy;
+    }
     f.n = pools_.normal[b[11] & (pools_.normal.size() - 1)];
     f.dn_dx = {Value(b[12]), Value(b[13]), Value(b[14])};
     f.dn_dy = {Value(b[15]), Value(b[16]), Value(b[17])};

@@ -29,7 +29,7 @@ Footprint<T> MakeFootprint(glm::vec<2, T> hpp, double fx, double fy, double skew
   f.dn_dy = {T(-skew * fx), T(2 * fy), T(0)};
   f.dng_dx = f.dn_dx;
   f.dng_dy = f.dn_dy;
-  return f;
+  return WithChainedProjection(f);  // tk19-forward's projected half-vector derivatives
 }
 
 template <class T>
@@ -51,7 +51,13 @@ double Normalisation(const VariantInfo& v, Ndf ndf, glm::dvec2 alpha, double fx,
   auto density = [&](double theta, double phi) {
     const double r = std::tan(theta);
     const glm::dvec2 s{r * std::cos(phi), r * std::sin(phi)};
-    return EvaluateVariant<double>(v.id, ndf, alpha, MakeFootprint<double>(s, fx, fy), params).density;
+    // One pixel's kernel is one matrix whatever h: tk19-forward's projected
+    // derivatives are held at those of the pixel's own half vector.
+    Footprint<double> f = MakeFootprint<double>(s, fx, fy);
+    const Footprint<double> centre = MakeFootprint<double>({0, 0}, fx, fy);
+    f.dh_dx = centre.dh_dx;
+    f.dh_dy = centre.dh_dy;
+    return EvaluateVariant<double>(v.id, ndf, alpha, f, params).density;
   };
   const double scale = std::min({alpha.x, alpha.y, std::max(fx, 1e-3)});
   std::vector<double> theta_breaks;

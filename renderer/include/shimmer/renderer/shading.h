@@ -4,6 +4,7 @@
 
 #include <glm/glm.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 #include "shimmer/core/result.h"
@@ -37,7 +38,33 @@ struct Footprint {
   glm::vec<3, T> dn_dy{0};
   glm::vec<3, T> dng_dx{0};
   glm::vec<3, T> dng_dy{0};
+  // Screen derivatives of the projected half vector h.xy (tk19-forward).
+  // The renderer differences h.xy across the quad or chains the analytic
+  // slope derivatives; WithChainedProjection does the latter.
+  glm::vec<2, T> dh_dx{0};
+  glm::vec<2, T> dh_dy{0};
 };
+
+// f with dh_dx, dh_dy from its slope derivatives by the chain rule, as an
+// analytic footprint has them: d h.xy = (ds - s (s . ds) / q) / sqrt(q),
+// q = 1 + |s|^2.
+// The slope and its derivatives are capped as the shading core caps them
+// (SLOPE_MAX, FOOTPRINT_MAX) and the rest is done in double, so that no
+// finite input overflows on the way.
+template <class T>
+Footprint<T> WithChainedProjection(Footprint<T> f) {
+  glm::dvec2 s(f.hpp);
+  if (const double m = std::max(std::abs(s.x), std::abs(s.y)); m > 1e8) s *= 1e8 / m;
+  const double q = 1 + glm::dot(s, s);
+  const double r = 1 / std::sqrt(q);
+  auto chained = [&](glm::dvec2 ds) {
+    ds = glm::clamp(ds, glm::dvec2(-1e4), glm::dvec2(1e4));
+    return glm::vec<2, T>((ds - s * (glm::dot(s, ds) / q)) * r);
+  };
+  f.dh_dx = chained(glm::dvec2(f.dhpp_dx));
+  f.dh_dy = chained(glm::dvec2(f.dhpp_dy));
+  return f;
+}
 
 template <class T>
 struct Params {

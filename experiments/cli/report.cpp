@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "commands.h"
+#include "shimmer/experiments/fit_report.h"
 #include "shimmer/experiments/job.h"
 #include "shimmer/experiments/report.h"
 #include "shimmer/experiments/output_files.h"
@@ -19,6 +20,7 @@ struct ReportCliOptions {
   bool video = false;
   std::string work, device;
   int slow = 1;
+  std::vector<std::string> fits;
 };
 
 // A shot table's grid: its reference and its first rows, each job's frames
@@ -62,6 +64,8 @@ void AddReportCommand(CLI::App& app) {
   cmd->add_option("--work", o->work, "--video: frame cache (default: frames/ beside the store)");
   cmd->add_option("--device", o->device, "--video: Vulkan device name substring");
   cmd->add_option("--slow", o->slow, "--video: write each frame N times (slow motion)")->capture_default_str();
+  cmd->add_option("--fits", o->fits,
+                  "fit.json of shimmer fit (repeatable): its joint fits join the overview's engine-settings part");
   cmd->callback([o] {
     RequireCreatableDirectory("--output", o->out);
     if (o->slow < 1 || o->slow > 100) throw UsageError("--slow must be 1..100, got " + std::to_string(o->slow));
@@ -69,10 +73,13 @@ void AddReportCommand(CLI::App& app) {
     std::string note;
     const auto rows = experiments::RowsOfCore(Take(store->All()), experiments::ShadingCoreVersion(), &note);
     if (rows.empty()) throw UsageError(o->db + ": the results store has no finished jobs");
+    std::vector<experiments::JointFit> engine_fits;
+    for (const std::string& f : o->fits)
+      for (experiments::JointFit& fit : Take(experiments::ReadJointFits(f))) engine_fits.push_back(std::move(fit));
     std::vector<std::string> warnings;
     if (!note.empty()) warnings.push_back(note);
     Check(experiments::WriteReport(rows, o->title, o->out, &warnings,
-                                   o->video ? GridWriter(*o) : experiments::ShotVideoWriter{}));
+                                   o->video ? GridWriter(*o) : experiments::ShotVideoWriter{}, engine_fits));
     for (const std::string& w : warnings) std::fprintf(stderr, "shimmer: warning: %s\n", w.c_str());
     std::printf("report: %s/report.md and %s/report.html\n", o->out.c_str(), o->out.c_str());
   });

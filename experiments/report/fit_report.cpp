@@ -8,6 +8,7 @@
 
 #include "report_parts.h"
 #include "shimmer/core/gnuplot.h"
+#include "shimmer/core/json_file.h"
 #include "shimmer/experiments/output_files.h"
 
 namespace shimmer::experiments {
@@ -88,20 +89,18 @@ std::string EngineSettingsMarkdown(const std::vector<JointFit>& fits) {
      << "Each engine's own knobs, fitted jointly per material on the training shots (the same J), beside the "
         "setting the engine ships. ± is half the width of J's 95 % interval, to first order from the metrics' "
         "intervals (the shots and terms taken as independent); a verdict needs the two intervals apart.\n\n";
-  std::map<std::string, std::vector<const JointFit*>> by_material;
-  for (const JointFit& f : fits) by_material[f.material].push_back(&f);
-  for (const auto& [material, list] : by_material) {
-    md << "### " << material << "\n\n"
-       << "| engine (variant) | fitted: the values to type in | shipped | J train, fitted (shipped) | "
-          "J validate, fitted (shipped) | held out |\n|---|---|---|---|---|---|\n";
-    for (const JointFit* f : list)
-      md << "| " << EngineKnobs(f->variant).first << " (`" << f->variant << "`) | "
-         << KnobText(f->variant, f->params, f->search.best) << " | " << KnobText(f->variant, f->params, f->defaults)
-         << " | " << WithInterval(f->train) << " (" << WithInterval(f->train_defaults) << ") | "
-         << WithInterval(f->validate) << " (" << WithInterval(f->validate_defaults) << ") | "
-         << Verdict(f->validate, f->validate_defaults) << " |\n";
-    md << "\n";
+  std::string material;
+  for (const EngineSettingRow& r : EngineSettingRows(fits)) {
+    if (r.material != material) {
+      md << (material.empty() ? "" : "\n") << "### " << r.material << "\n\n"
+         << "| engine (variant) | fitted: the values to type in | shipped | J train, fitted (shipped) | "
+            "J validate, fitted (shipped) | held out |\n|---|---|---|---|---|---|\n";
+      material = r.material;
+    }
+    md << "| " << r.engine << " | " << r.fitted << " | " << r.shipped << " | " << r.train << " | " << r.validate
+       << " | " << r.held_out << " |\n";
   }
+  md << "\n";
   bool any_folds = false;
   for (const JointFit& f : fits) any_folds |= !f.folds.empty();
   if (!any_folds) return md.str();
@@ -127,6 +126,83 @@ std::string EngineSettingsMarkdown(const std::vector<JointFit>& fits) {
 }
 
 }  // namespace
+
+std::vector<EngineSettingRow> EngineSettingRows(const std::vector<JointFit>& fits) {
+  std::map<std::string, std::vector<const JointFit*>> by_material;
+  for (const JointFit& f : fits) by_material[f.material].push_back(&f);
+  std::vector<EngineSettingRow> rows;
+  for (const auto& [material, list] : by_material)
+    for (const JointFit* f : list)
+      rows.push_back({material, EngineKnobs(f->variant).first + " (`" + f->variant + "`)",
+                      KnobText(f->variant, f->params, f->search.best), KnobText(f->variant, f->params, f->defaults),
+                      WithInterval(f->train) + " (" + WithInterval(f->train_defaults) + ")",
+                      WithInterval(f->validate) + " (" + WithInterval(f->validate_defaults) + ")",
+                      Verdict(f->validate, f->validate_defaults)});
+  return rows;
+}
+
+TransferCount CountTransfer(const std::vector<JointFit>& fits, bool leave_out) {
+  TransferCount c;
+  for (const JointFit& f : fits)
+    for (const CrossFold& fold : f.folds) {
+      if (fold.leave_out != leave_out) continue;
+      const std::string v = Verdict(fold.held_out, fold.held_out_defaults);
+      (v == "fitted better" ? c.fitted_better : v == "shipped better" ? c.shipped_better : c.within) += 1;
+    }
+  return c;
+}
+
+Result<std::vector<JointFit>> ReadJointFits(const std::string& path) {
+  auto doc = ReadJsonFile(path);
+  if (!doc) return doc.failure();
+  auto fail = [&](const std::string& why) {
+    return Result<std::vector<JointFit>>(Error{ErrorCode::kBadInput, path + ": " + why});
+  };
+  try {
+    if (!doc->is_object() || !doc->contains("joint_fits"))
+      return fail("not a fit.json with joint fits (no \"joint_fits\"; run shimmer fit on a spec with joint fits)");
+    auto objective = [](const nlohmann::json& j) {
+      ObjectiveValue v;
+      v.j = j.at("j").get<double>();
+      v.half_width = j.at("j_ci95_half_width").get<double>();
+      return v;
+    };
+    std::vector<JointFit> fits;
+    for (const nlohmann::json& j : doc->at("joint_fits")) {
+      JointFit f;
+      f.variant = j.at("variant").get<std::string>();
+      f.material = j.at("material").get<std::string>();
+      f.ndf = j.at("ndf").get<std::string>();
+      f.alpha = j.at("alpha").get<double>();
+      f.params = j.at("params").get<std::vector<std::string>>();
+      f.search.best = j.at("values").get<std::vector<double>>();
+      f.train = objective(j.at("train"));
+      f.validate = objective(j.at("validate"));
+      const nlohmann::json& d = j.at("defaults");
+      f.defaults = d.at("values").get<std::vector<double>>();
+      f.train_defaults = objective(d.at("train"));
+      f.validate_defaults = objective(d.at("validate"));
+      if (f.search.best.size() != f.params.size() || f.defaults.size() != f.params.size())
+        return fail("joint fit of " + f.variant + " on " + f.material + " has " +
+                    std::to_string(f.search.best.size()) + " values for " + std::to_string(f.params.size()) +
+                    " parameters");
+      for (const nlohmann::json& fj : j.value("folds", nlohmann::json::array())) {
+        CrossFold fold;
+        fold.scene = fj.at("scene").get<std::string>();
+        fold.leave_out = fj.at("leave_out").get<bool>();
+        fold.values = fj.at("values").get<std::vector<double>>();
+        fold.held_out = objective(fj.at("held_out"));
+        fold.held_out_defaults = objective(fj.at("held_out_defaults"));
+        f.folds.push_back(std::move(fold));
+      }
+      fits.push_back(std::move(f));
+    }
+    if (fits.empty()) return fail("has no joint fits");
+    return fits;
+  } catch (const nlohmann::json::exception& e) {
+    return fail(std::string("not a fit.json as shimmer fit writes it: ") + e.what());
+  }
+}
 
 Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::string& out_dir,
                       std::vector<std::string>* warnings) {

@@ -281,7 +281,8 @@ std::vector<JobResult> RowsOfCore(std::vector<JobResult> rows, const std::string
 }
 
 Status WriteReport(const std::vector<JobResult>& rows, const std::string& title, const std::string& out_dir,
-                   std::vector<std::string>* warnings, const ShotVideoWriter& video) {
+                   std::vector<std::string>* warnings, const ShotVideoWriter& video,
+                   const std::vector<JointFit>& engine_fits) {
   if (rows.empty()) return Status::Failure("the results store has no finished jobs");
   auto staged = StagedDirectory::Create(out_dir);
   if (!staged) return staged.failure();
@@ -310,7 +311,7 @@ Status WriteReport(const std::vector<JobResult>& rows, const std::string& title,
       if (Status s = video(ordered, file); !s) return dir.Unstaged(Prefixed("video of " + group.key, s.failure()));
       videos.insert(group.key);
     }
-  const report::Document doc = report::BuildDocument(groups, title, rows.size(), sg ? &*sg : nullptr, &videos);
+  const report::Document doc = report::BuildDocument(groups, title, rows.size(), sg ? &*sg : nullptr, &videos, engine_fits);
 
   std::vector<report::PlotFile> files;
   if (sg) {

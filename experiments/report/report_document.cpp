@@ -72,7 +72,7 @@ std::string VerdictText(Verdict v) {
   return "n/a (no intervals)";
 }
 
-void Overview(Document& doc, const std::vector<Group>& groups) {
+void Overview(Document& doc, const std::vector<Group>& groups, const std::vector<JointFit>& engine_fits) {
   std::vector<const Group*> included;
   std::vector<const Group*> unconverged, unchecked;
   for (const Group& g : groups) switch (ConvergenceOf(g)) {
@@ -161,6 +161,8 @@ void Overview(Document& doc, const std::vector<Group>& groups) {
                     Join(unchecked_shots, "; "));
   if (items.empty()) items.push_back("none: every shot's reference was shown converged");
   doc.List(items);
+
+  BeyondThePapers(doc, included, engine_fits);
 }
 
 void ShotTable(Document& doc, const Group& group, bool has_video) {
@@ -435,7 +437,8 @@ void Document::Figures(std::vector<std::string> files, std::vector<std::string> 
 }
 
 Document BuildDocument(const std::vector<Group>& groups, const std::string& title, std::size_t jobs,
-                       const SgAccuracyTable* sg, const std::set<std::string>* videos) {
+                       const SgAccuracyTable* sg, const std::set<std::string>* videos,
+                       const std::vector<JointFit>& engine_fits) {
   std::set<std::string> devices;
   for (const Group& g : groups)
     for (const JobResult* r : g.rows)
@@ -449,7 +452,7 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
                 Join(device_list) + ". Which filter to use: the overview; each shot's numbers: the tables below; " +
                 "definitions: the method at the end. Raw rows: [report.csv](report.csv); this report as one page: " +
                 "[report.html](report.html).");
-  Overview(doc, groups);
+  Overview(doc, groups, engine_fits);
   if (sg) SgAccuracySection(doc, *sg);
   NormalMapMemorySection(doc, groups);
   SparkleSection(doc, groups);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "report_parts.h"
+#include "shimmer/experiments/fit_run.h"
 #include "shimmer/experiments/sg_accuracy.h"
 
 namespace shimmer::experiments::report {
@@ -44,6 +45,7 @@ inline constexpr const char* kLeaderboardHeading = "Leaderboard";
 inline constexpr const char* kHeatmapHeading = "Heatmap";
 inline constexpr const char* kRecommendationsHeading = "Recommendations";
 inline constexpr const char* kExcludedHeading = "Shots left out";
+inline constexpr const char* kBeyondHeading = "Beyond the papers";
 inline constexpr const char* kShotsHeading = "Shots";
 inline constexpr const char* kMethodHeading = "Method";
 // Only in reports whose store has external sequences.
@@ -57,8 +59,15 @@ inline constexpr const char* kSgAccuracyStem = "sg_accuracy";
 
 // `sg`: the SG approximation accuracy section after the overview (null: none).
 // `videos`: the keys of the groups whose grid video lies beside the report.
+// `engine_fits`: joint fits from a fit.json for the overview's engine-settings part.
 Document BuildDocument(const std::vector<Group>& groups, const std::string& title, std::size_t jobs,
-                       const SgAccuracyTable* sg = nullptr, const std::set<std::string>* videos = nullptr);
+                       const SgAccuracyTable* sg = nullptr, const std::set<std::string>* videos = nullptr,
+                       const std::vector<JointFit>& engine_fits = {});
+
+// The overview's "Beyond the papers" part (report_beyond.cpp): the Jacobian
+// GGX rect against seed 000's, TK19's forward filter against K16's with its
+// Fig. 1 ordering, and the engine settings of `engine_fits`.
+void BeyondThePapers(Document& doc, const std::vector<const Group*>& groups, const std::vector<JointFit>& engine_fits);
 
 std::string ToMarkdown(const Document& doc);
 // One GitHub-flavoured table ('|' in cells escaped), ending in a newline.

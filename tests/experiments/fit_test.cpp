@@ -2,9 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 
 #include "shimmer/experiments/fit.h"
+#include "shimmer/experiments/fit_report.h"
 #include "shimmer/experiments/fit_run.h"
+#include "temp_dir.h"
 
 namespace shimmer::experiments {
 namespace {
@@ -139,6 +142,63 @@ TEST(Fit, PowerLawRecoversKnownCurveDespiteAnOutlier) {
   EXPECT_NEAR(law.b, 0.6, 0.05);
   EXPECT_EQ(law.residuals.size(), alpha.size());
   EXPECT_GT(std::abs(law.residuals[3]), 1.0);  // the outlier stays an outlier
+}
+
+// fit.json's joint fits read back as WriteFitReport wrote them (JointFit::ToJson).
+TEST(FitJson, JointFitsReadBackAsWritten) {
+  JointFit f;
+  f.variant = "godot", f.material = "ggx:0.1", f.ndf = "ggx", f.alpha = 0.1;
+  f.params = {"sigma2", "kappa"};
+  f.search.best = {0.2076, 0.9048};
+  f.defaults = {0.25, 0.18};
+  f.train = {0.56, 0.24, {}};
+  f.validate = {0.67, 0.21, {}};
+  f.train_defaults = {0.6, 0.23, {}};
+  f.validate_defaults = {0.671, 0.2, {}};
+  f.folds.push_back({"wires", true, {0.3, 0.5}, {0.1, 0.08, {}}, {0.14, 0.09, {}}});
+  shimmer::testing::TempDir dir;
+  const auto path = dir.path() / "fit.json";
+  std::ofstream(path) << nlohmann::json{{"fits", nlohmann::json::array()}, {"joint_fits", {f.ToJson()}}}.dump(2);
+  const auto read = ReadJointFits(path.string());
+  ASSERT_TRUE(read) << read.error();
+  ASSERT_EQ(read->size(), 1u);
+  const JointFit& g = read->front();
+  EXPECT_EQ(g.variant, "godot");
+  EXPECT_EQ(g.material, "ggx:0.1");
+  EXPECT_EQ(g.params, f.params);
+  EXPECT_EQ(g.search.best, f.search.best);
+  EXPECT_EQ(g.defaults, f.defaults);
+  EXPECT_DOUBLE_EQ(g.validate.j, 0.67);
+  EXPECT_DOUBLE_EQ(g.validate_defaults.half_width, 0.2);
+  ASSERT_EQ(g.folds.size(), 1u);
+  EXPECT_EQ(g.folds[0].scene, "wires");
+  EXPECT_DOUBLE_EQ(g.folds[0].held_out_defaults.j, 0.14);
+  // The engine-settings table: Godot's knobs under its own names.
+  const auto rows = EngineSettingRows(*read);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].fitted, "roughness_limiter_amount = 0.2076, roughness_limiter_limit = 0.9048");
+  EXPECT_EQ(rows[0].held_out, "within intervals");
+}
+
+TEST(FitJson, BadFilesGetOneErrorNamingThem) {
+  shimmer::testing::TempDir dir;
+  auto write = [&](const char* name, const std::string& text) {
+    std::ofstream(dir.path() / name) << text;
+    return (dir.path() / name).string();
+  };
+  const std::string cases[][2] = {
+      {write("none.json", "{\"fits\": []}"), "no \"joint_fits\""},
+      {write("empty.json", "{\"joint_fits\": []}"), "has no joint fits"},
+      {write("short.json", "{\"joint_fits\": [{\"variant\": \"godot\"}]}"), "not a fit.json as shimmer fit writes it"},
+      {write("broken.json", "{\"joint_fits\": ["), "broken.json"},
+      {(dir.path() / "missing.json").string(), "missing.json"},
+  };
+  for (const auto& [path, why] : cases) {
+    const auto read = ReadJointFits(path);
+    ASSERT_FALSE(read) << path;
+    EXPECT_NE(read.error().find(why), std::string::npos) << read.error();
+    EXPECT_NE(read.error().find(std::filesystem::path(path).filename().string()), std::string::npos) << read.error();
+  }
 }
 
 }  // namespace

@@ -299,6 +299,108 @@ TEST(ReportOverview, NormalMappedShotsAreTheirOwnClassWithTheirMemory) {
   EXPECT_EQ(section.find("`tk19` |"), std::string::npos);  // not a normal-mapped shot's row
 }
 
+// The overview's "Beyond the papers" part from rows with known numbers.
+std::string BeyondSection(const std::vector<JobResult>& rows, const std::vector<JointFit>& fits = {}) {
+  const std::vector<Group> groups = GroupRows(rows);
+  const std::string md = ToMarkdown(BuildDocument(groups, "t", rows.size(), nullptr, nullptr, fits));
+  const std::size_t at = md.find(std::string("### ") + kBeyondHeading);
+  if (at == std::string::npos) return "";
+  return md.substr(at, md.find("\n## ", at + 1) - at);
+}
+
+void WithIntervals(JobResult& r, double tv_half, double bias_half) {
+  const double tv = r.metrics["tv_err"], bias = r.metrics["energy_bias"];
+  r.metrics["ci95"] = {{"tv_err", {tv - tv_half, tv + tv_half}}, {"energy_bias", {bias - bias_half, bias + bias_half}}};
+}
+
+TEST(ReportBeyond, JacobianAgainstTheCentreFormPerScene) {
+  std::vector<JobResult> rows;
+  for (const char* camera : {"orbit", "dolly"}) {
+    auto add = [&](const char* scene, const char* v, double err, double bias, double bias_half) {
+      rows.push_back(Row(scene, "ggx:0.02", v, err, bias));
+      rows.back().job.camera = camera;
+      WithIntervals(rows.back(), 0.05, bias_half);
+    };
+    add("sphere-field", "none", 1.0, 0.0, 0.01);
+    add("sphere-field", "k16-ggx-rect-stable", 0.3, 0.56, 0.05);
+    add("sphere-field", "k16-ggx-rect-jacobian", 0.32, 0.02, 0.05);  // closer to 0, intervals apart
+    add("wires", "none", 1.0, 0.0, 0.01);
+    add("wires", "k16-ggx-rect-stable", 0.5, -0.10, 0.2);
+    add("wires", "k16-ggx-rect-jacobian", 0.9, -0.05, 0.2);  // closer, overlapping; tv_err higher
+  }
+  const std::string section = BeyondSection(rows);
+  ASSERT_FALSE(section.empty());
+  EXPECT_NE(section.find("| sphere-field | 2 | +0.560 (+0.560–+0.560) | +0.020 (+0.020–+0.020) | 2 (2 apart) | "
+                         "0.3 (0.3–0.3) | 0.32 (0.32–0.32) | 0 / 2 / 0 |"),
+            std::string::npos)
+      << section;
+  EXPECT_NE(section.find("| wires | 2 | -0.100 (-0.100–-0.100) | -0.050 (-0.050–-0.050) | 2 (0 apart) | 0.5 "
+                         "(0.5–0.5) | 0.9 (0.9–0.9) | 0 / 0 / 2 |"),
+            std::string::npos)
+      << section;
+  EXPECT_NE(section.find("| **all** | 4 |"), std::string::npos) << section;
+  // No TK19 rows and no fits: those parts say what they need.
+  EXPECT_NE(section.find("Needs `tk19-forward`"), std::string::npos) << section;
+  EXPECT_NE(section.find("--fits"), std::string::npos) << section;
+}
+
+TEST(ReportBeyond, Tk19FormsOrderedByRelmseOnTheGrazingPlane) {
+  std::vector<JobResult> rows;
+  struct V {
+    const char* variant;
+    std::map<std::string, double> params;
+    double relmse;
+  };
+  const V forms[] = {{"none", {}, 6.0},
+                     {"k16-beckmann-parallelogram", {{"sigma2", 1.0}}, 400.0},
+                     {"k16-beckmann-parallelogram", {}, 150.0},  // the default sigma2 = 0.25
+                     {"k16-beckmann-rect", {{"fp_max", 1.0}}, 60.0},
+                     {"tk19-forward-rect", {}, 20.0},
+                     {"tk19-forward", {}, 10.0}};
+  for (const char* material : {"ggx:0.01", "ggx:0.05"})
+    for (const V& f : forms) {
+      rows.push_back(Row("bumpy-plane", material, f.variant, 1.0, 0.0));
+      rows.back().job.params = f.params;
+      // At α = 0.05 everything is 10x worse: the part reads the lowest α only,
+      // and the largest relmse over all tables finds the other one.
+      rows.back().metrics["relmse"] = f.relmse * (std::string(material) == "ggx:0.01" ? 1 : 10);
+    }
+  const std::string section = BeyondSection(rows);
+  EXPECT_NE(section.find("**quad**, lowest relmse first: TK19 non-axis-aligned 10 < TK19 axis-aligned 20 < K16 "
+                         "axis-aligned 60 < K16 non-axis-aligned, ½U (0.5 px filter) 150 < K16 non-axis-aligned, "
+                         "the slide's bare U 400"),
+            std::string::npos)
+      << section;
+  EXPECT_NE(section.find("| K16 non-axis-aligned, the slide's bare U | `k16-beckmann-parallelogram sigma2=1` | 400 | "
+                         "+0.000 | 4000 (bumpy-plane / ggx:0.05 / orbit / quad) |"),
+            std::string::npos)
+      << section;
+}
+
+TEST(ReportBeyond, EngineSettingsFromJointFits) {
+  JointFit f;
+  f.variant = "unity-hdrp", f.material = "ggx:0.02", f.ndf = "ggx", f.alpha = 0.02;
+  f.params = {"sigma2", "kappa"};
+  f.search.best = {0.2, 0.09};
+  f.defaults = {0.1, 0.04};
+  f.validate = {1.0, 0.1, {}};
+  f.validate_defaults = {2.0, 0.1, {}};  // apart: fitted better
+  f.folds.push_back({"wires", true, {0.3, 0.04}, {3.0, 0.1, {}}, {1.0, 0.1, {}}});
+  f.folds.push_back({"wires", false, {0.3, 0.04}, {1.0, 0.5, {}}, {1.2, 0.5, {}}});
+  std::vector<JobResult> rows = {Row("sphere", "ggx:0.02", "none", 1.0, 0.0)};
+  const std::string section = BeyondSection(rows, {f});
+  // HDRP's threshold is the root of kappa: sqrt(0.09) = 0.3.
+  EXPECT_NE(section.find("| ggx:0.02 | Unity HDRP (`unity-hdrp`) | screen space variance = 0.2, threshold = 0.3 | "
+                         "screen space variance = 0.1, threshold = 0.2 | 1 ± 0.1 (2 ± 0.1) | fitted better |"),
+            std::string::npos)
+      << section;
+  EXPECT_NE(section.find("fitted better in 0, shipped better in 1, within intervals in 0. Fitted on one scene "
+                         "alone and measured there under the validation cameras: fitted better in 0, shipped better "
+                         "in 0, within intervals in 1."),
+            std::string::npos)
+      << section;
+}
+
 // Intervals decide the verdict: overlapping → indistinguishable, separate → better.
 TEST(ReportOverview, PickAgainstRunnerUpByIntervals) {
   auto rows_with = [](double half) {

@@ -15,4 +15,25 @@ namespace shimmer::experiments {
 Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::string& out_dir,
                       std::vector<std::string>* warnings);
 
+// The joint fits of a fit.json that WriteFitReport wrote, with what the
+// engine-settings tables show (settings, J and its half-width, folds; not
+// the per-shot terms or the search's samples). One error naming the file
+// when it cannot be read, is not a fit.json, or has no joint fits.
+Result<std::vector<JointFit>> ReadJointFits(const std::string& path);
+
+// One row of the engine-settings table (fit.md, and the report's overview):
+// a joint fit's setting under the engine's own knob names beside the
+// setting the engine ships, their J, and whether held-out shots separate them.
+struct EngineSettingRow {
+  std::string material, engine, fitted, shipped, train, validate, held_out;
+};
+std::vector<EngineSettingRow> EngineSettingRows(const std::vector<JointFit>& fits);
+
+// Cross-validation folds of the joint fits against the shipped setting:
+// how many held-out verdicts fall each way.
+struct TransferCount {
+  int fitted_better = 0, shipped_better = 0, within = 0;
+};
+TransferCount CountTransfer(const std::vector<JointFit>& fits, bool leave_out);
+
 }  // namespace shimmer::experiments

@@ -13,6 +13,7 @@
 
 #include "shimmer/core/result.h"
 
+#include "shimmer/experiments/fit_run.h"
 #include "shimmer/experiments/result_store.h"
 
 namespace shimmer::experiments {
@@ -39,7 +40,11 @@ std::vector<JobResult> RowsOfCore(std::vector<JobResult> rows, const std::string
 // links it (kVideoSuffix after the table's plot stem).
 using ShotVideoWriter = std::function<Status(const std::vector<const JobResult*>& rows, const std::filesystem::path& file)>;
 inline constexpr const char* kVideoSuffix = "_grid.mp4";
+//
+// `engine_fits`, when given (ReadJointFits of a fit.json), are shown in the
+// overview's "Beyond the papers" part beside the store's own results.
 Status WriteReport(const std::vector<JobResult>& rows, const std::string& title, const std::string& out_dir,
-                   std::vector<std::string>* warnings, const ShotVideoWriter& video = {});
+                   std::vector<std::string>* warnings, const ShotVideoWriter& video = {},
+                   const std::vector<JointFit>& engine_fits = {});
 
 }  // namespace shimmer::experiments

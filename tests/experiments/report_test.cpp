@@ -401,6 +401,44 @@ TEST(ReportBeyond, EngineSettingsFromJointFits) {
       << section;
 }
 
+// Glint shots' sparkle statistics: one reference row per shot, then each
+// variant's counts and ratios; stores without them have no such section.
+TEST(ReportSparkles, ReferenceRowOncePerShotThenEachVariant) {
+  std::vector<JobResult> rows;
+  const nlohmann::json reference = {{"mean_count", 40.0}, {"count_cv", 0.25}, {"mean_lifetime", 3.5}};
+  auto add = [&](const char* variant, double count, double cv, double ratio) {
+    rows.push_back(Row("glint-plane", "glints:0.3", variant, 1.0, 0.0));
+    rows.back().metrics["sparkles"] = {
+        {"threshold", 2.0},
+        {"reference", reference},
+        {"test", {{"mean_count", count}, {"count_cv", cv}, {"mean_lifetime", 1.5}}},
+        {"mean_count_ratio", ratio},
+        {"count_variance_ratio", ratio * ratio},
+        {"lifetime_ratio", 1.5 / 3.5}};
+  };
+  add("none", 80.0, 0.9, 2.0);
+  add("glints-zk16", 2.0, 0.1, 0.05);
+  const std::string md = ToMarkdown(BuildDocument(GroupRows(rows), "t", rows.size()));
+  const std::size_t at = md.find(kSparklesHeading);
+  ASSERT_NE(at, std::string::npos) << md;
+  const std::string section = md.substr(at, md.find("\n## ", at + 1) - at);
+  EXPECT_NE(section.find("luminance exceeds 2 in a frame"), std::string::npos) << section;
+  EXPECT_NE(section.find("| glint-plane / glints:0.3 / orbit | reference | 40.0 | 0.250 | 3.50 |  |  |  |"),
+            std::string::npos)
+      << section;
+  EXPECT_NE(section.find("| glint-plane / glints:0.3 / orbit | `glints-zk16` | 2.0 | 0.100 | 1.50 | 0.05 | 0.0025 | "
+                         "0.429 |"),
+            std::string::npos)
+      << section;
+  std::size_t references = 0;
+  for (std::size_t p = section.find("| reference |"); p != std::string::npos; p = section.find("| reference |", p + 1))
+    ++references;
+  EXPECT_EQ(references, 1u);
+  // Without sparkle statistics there is no section.
+  rows = {Row("sphere", "ggx:0.05", "none", 1.0, 0.0)};
+  EXPECT_EQ(ToMarkdown(BuildDocument(GroupRows(rows), "t", 1)).find(kSparklesHeading), std::string::npos);
+}
+
 // Intervals decide the verdict: overlapping → indistinguishable, separate → better.
 TEST(ReportOverview, PickAgainstRunnerUpByIntervals) {
   auto rows_with = [](double half) {

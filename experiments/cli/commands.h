@@ -98,6 +98,7 @@ void AddRenderCommand(CLI::App& app);
 void AddMetricsCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddMergeCommand(CLI::App& app);
+void AddPruneCommand(CLI::App& app);
 void AddSweepCommand(CLI::App& app);
 void AddReportCommand(CLI::App& app);
 void AddFitCommand(CLI::App& app);

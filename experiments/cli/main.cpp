@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   shimmer::cli::AddVideoCommand(app);
   shimmer::cli::AddRunCommand(app);
   shimmer::cli::AddMergeCommand(app);
+  shimmer::cli::AddPruneCommand(app);
   shimmer::cli::AddSweepCommand(app);
   shimmer::cli::AddReportCommand(app);
   shimmer::cli::AddFitCommand(app);

@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <map>
 #include <optional>
@@ -544,6 +545,83 @@ Status ResultStore::InsertBenchmarks(const std::vector<BenchmarkCost>& costs) {
 Result<std::vector<BenchmarkCost>> ResultStore::Benchmarks() {
   return TypedRows<BenchmarkCost>(
       db_, "SELECT cost_json FROM benchmarks ORDER BY scene, derivatives, variant, params, device", path_, "benchmark");
+}
+
+Result<ResultStore::Pruned> ResultStore::PruneOtherCores(const std::string& core, bool dry_run) {
+  auto rows = All();
+  if (!rows) return rows.failure();
+  Pruned p;
+  std::vector<std::string> doomed;
+  std::set<std::string> kept_references, other_cores;
+  for (const JobResult& r : *rows) {
+    if (r.job.external || r.core_version == core) {
+      ++p.kept_jobs;
+      if (r.job.external) ++p.kept_external;
+      kept_references.insert(r.reference_id);
+    } else {
+      doomed.push_back(r.id);
+      other_cores.insert(r.core_version);
+    }
+  }
+  if (p.kept_jobs == p.kept_external && !doomed.empty())
+    return Result<Pruned>::Failure(path_ + ": no job of the current shading core " + core +
+                                   " is in the store; pruning would leave only external rows (nothing removed; run "
+                                   "the spec with this shimmer first)");
+  p.jobs = doomed.size();
+  p.cores = other_cores.size();
+  std::vector<std::string> orphan_shots;
+  std::vector<BenchmarkCost> stale_costs;
+  if (has_verdict_tables_) {
+    auto shots = Shots();
+    if (!shots) return shots.failure();
+    for (const ShotCheck& s : *shots)
+      if (!kept_references.count(s.reference_id)) orphan_shots.push_back(s.reference_id);
+    auto costs = Benchmarks();
+    if (!costs) return costs.failure();
+    for (const BenchmarkCost& c : *costs)
+      if (c.core != core) stale_costs.push_back(c);
+  }
+  p.shots = orphan_shots.size();
+  p.benchmarks = stale_costs.size();
+  if (dry_run || (p.jobs == 0 && p.shots == 0 && p.benchmarks == 0)) return p;
+
+  if (Status s = Exec("BEGIN IMMEDIATE;"); !s) return s.failure();
+  auto run = [&](const char* sql, const std::function<void(sqlite3_stmt*)>& bind) -> Status {
+    Statement st;
+    bool done = sqlite3_prepare_v2(db_, sql, -1, &st.stmt, nullptr) == SQLITE_OK;
+    if (done) {
+      bind(st.stmt);
+      done = sqlite3_step(st.stmt) == SQLITE_DONE;
+    }
+    if (done) return Ok();
+    Error e = Failure("cannot remove old rows");
+    (void)Exec("ROLLBACK;");
+    return e;
+  };
+  auto text = [](sqlite3_stmt* st, int i, const std::string& v) {
+    sqlite3_bind_text(st, i, v.c_str(), -1, SQLITE_TRANSIENT);
+  };
+  for (const std::string& id : doomed)
+    if (Status s = run("DELETE FROM jobs WHERE id = ?", [&](sqlite3_stmt* st) { text(st, 1, id); }); !s)
+      return s.failure();
+  for (const std::string& ref : orphan_shots)
+    if (Status s = run("DELETE FROM shots WHERE reference_id = ?", [&](sqlite3_stmt* st) { text(st, 1, ref); }); !s)
+      return s.failure();
+  for (const BenchmarkCost& c : stale_costs) {
+    const std::string params = nlohmann::json(c.params).dump();  // as InsertBenchmarks keys it
+    Status s = run(
+        "DELETE FROM benchmarks WHERE scene = ? AND derivatives = ? AND variant = ? AND params = ? AND width = ? AND "
+        "height = ? AND device = ?",
+        [&](sqlite3_stmt* st) {
+          text(st, 1, c.scene), text(st, 2, c.derivatives), text(st, 3, c.variant), text(st, 4, params);
+          sqlite3_bind_int(st, 5, c.width), sqlite3_bind_int(st, 6, c.height), text(st, 7, c.device);
+        });
+    if (!s) return s.failure();
+  }
+  if (Status s = Exec("COMMIT;"); !s) return s.failure();
+  // Give the space back; the rows are gone whether or not this succeeds.
+  (void)Exec("VACUUM;");
+  return p;
 }
 
 Status ResultStore::InsertFit(const std::string& variant, const std::string& param, const std::string& material,

@@ -522,6 +522,9 @@ std::vector<Case> UnitCases() {
       {"MergeOutputUnderAFile", Both(File("a.db", "just text\n"), a_file), "merge a.db -o file/all.db", 2,
        "file/all.db"},
       {"MergeNoOutput", Nothing(), "merge a.db", 2, "--output"},
+      // prune
+      {"PruneNoSuchStore", Nothing(), "prune a.db", 2, "a.db: no such results store"},
+      {"PruneNotAStore", File("a.db", "just text\n"), "prune a.db --dry-run", 2, "a.db"},
       // sweep (refused before any render)
       {"SweepParamShape", Nothing(), "sweep --param fp_max=0.1:1", 2, "--param"},
       {"SweepParamSteps", Nothing(), "sweep --param fp_max=0.1:1:100000 --size 16 16 --frames 2", 2, "steps"},

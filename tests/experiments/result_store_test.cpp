@@ -261,5 +261,74 @@ TEST(ResultStore, ShotChecksAndBenchmarksJoinTheirRowsAndMerge) {
   }
 }
 
+// A store run with two shading cores: prune keeps the current core's rows and
+// the external ones, the checks they refer to and the costs this core timed;
+// a dry run counts the same and changes nothing; a store with no row of the
+// current core is refused untouched.
+TEST(ResultStore, PruneRemovesOlderCoresRowsChecksAndCosts) {
+  TempDir dir;
+  const std::string path = (dir.path() / "s.db").string();
+  JobResult current = MakeResult("tk19", 0.5, 3.0);
+  JobResult old_a = current, old_b = MakeResult("none", 0, 1.0);
+  old_a.core_version = "aaaa", old_a.id = "old-a", old_a.reference_id = "ref-old";
+  old_b.core_version = "bbbb", old_b.id = "old-b", old_b.reference_id = "ref-old";
+  JobResult external = MakeResult("engine", 0, 1.0);
+  external.job.external = ExternalFrames{"t", "r", "th", "rh", 0, ""};
+  external.job.derivatives = kExternalDerivatives;
+  external.core_version = "aaaa", external.id = "ext", external.reference_id = "ref-ext";
+  ShotCheck kept_shot, old_shot;
+  kept_shot.reference_id = current.reference_id;
+  old_shot.reference_id = "ref-old";
+  BenchmarkCost timed_now, timed_before;
+  timed_now.scene = timed_before.scene = "sphere";
+  timed_now.derivatives = timed_before.derivatives = "quad";
+  timed_now.variant = "tk19", timed_before.variant = "none";
+  timed_now.width = timed_now.height = timed_before.width = timed_before.height = 512;
+  timed_now.device = timed_before.device = "dev";
+  timed_now.core = ShadingCoreVersion(), timed_before.core = "aaaa";
+  {
+    auto store = ResultStore::Open(path);
+    ASSERT_TRUE(store) << store.error();
+    for (const JobResult& r : {current, old_a, old_b, external}) ASSERT_TRUE((*store)->Insert(r));
+    ASSERT_TRUE((*store)->InsertShot(kept_shot));
+    ASSERT_TRUE((*store)->InsertShot(old_shot));
+    ASSERT_TRUE((*store)->InsertBenchmarks({timed_now, timed_before}));
+  }
+  auto store = ResultStore::Open(path);
+  ASSERT_TRUE(store);
+  const auto dry = (*store)->PruneOtherCores(ShadingCoreVersion(), /*dry_run=*/true);
+  ASSERT_TRUE(dry) << dry.error();
+  EXPECT_EQ(dry->jobs, 2u);
+  EXPECT_EQ(dry->cores, 2u);
+  EXPECT_EQ(dry->shots, 1u);
+  EXPECT_EQ(dry->benchmarks, 1u);
+  EXPECT_EQ(dry->kept_jobs, 2u);
+  EXPECT_EQ(dry->kept_external, 1u);
+  EXPECT_EQ((*store)->All()->size(), 4u);  // the dry run changed nothing
+  // Refused with a core the store has no job of: nothing removed.
+  const auto refused = (*store)->PruneOtherCores("cccc", false);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().find("nothing removed"), std::string::npos) << refused.error();
+  EXPECT_EQ((*store)->All()->size(), 4u);
+  const auto pruned = (*store)->PruneOtherCores(ShadingCoreVersion(), false);
+  ASSERT_TRUE(pruned) << pruned.error();
+  EXPECT_EQ(pruned->jobs, 2u);
+  std::set<std::string> ids;
+  const auto left = (*store)->All();
+  ASSERT_TRUE(left);
+  for (const JobResult& r : *left) ids.insert(r.id);
+  EXPECT_EQ(ids, (std::set<std::string>{current.id, "ext"}));
+  const auto shots = (*store)->Shots();
+  ASSERT_EQ(shots->size(), 1u);
+  EXPECT_EQ(shots->front().reference_id, current.reference_id);
+  const auto costs = (*store)->Benchmarks();
+  ASSERT_EQ(costs->size(), 1u);
+  EXPECT_EQ(costs->front().variant, "tk19");
+  // Again: nothing left to remove.
+  const auto again = (*store)->PruneOtherCores(ShadingCoreVersion(), false);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->jobs + again->shots + again->benchmarks, 0u);
+}
+
 }  // namespace
 }  // namespace shimmer::experiments

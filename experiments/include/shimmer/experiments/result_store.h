@@ -143,6 +143,20 @@ class ResultStore {
                    const nlohmann::json& result);
   Result<std::vector<nlohmann::json>> Fits();
 
+  // A store keeps the rows of every shading core it ran with (a changed core
+  // moves every job id). PruneOtherCores removes the job rows of cores other
+  // than `core` (external sequences, which no core renders, are kept), the
+  // convergence checks no remaining row refers to, and the benchmark costs
+  // another core timed; then compacts the file. One transaction: all or
+  // nothing. Refused, with nothing removed, when no job row of `core` is in
+  // the store (pruning would empty it). `dry_run` counts without removing.
+  struct Pruned {
+    std::size_t jobs = 0, shots = 0, benchmarks = 0;  // removed (or, in a dry run, to remove)
+    std::size_t kept_jobs = 0, kept_external = 0;
+    std::size_t cores = 0;  // distinct other cores among the removed jobs
+  };
+  Result<Pruned> PruneOtherCores(const std::string& core, bool dry_run);
+
  private:
   explicit ResultStore(sqlite3* db, std::string path);
   Result<std::vector<JobResult>> Select(const std::string& where, const std::string& id);

@@ -344,7 +344,7 @@ TEST(ReportBeyond, JacobianAgainstTheCentreFormPerScene) {
   EXPECT_NE(section.find("--fits"), std::string::npos) << section;
 }
 
-TEST(ReportBeyond, Tk19FormsOrderedByRelmseOnTheGrazingPlane) {
+TEST(ReportBeyond, Tk19FormsOrderedByRelmsePerSceneAtTheLowestAlpha) {
   std::vector<JobResult> rows;
   struct V {
     const char* variant;
@@ -366,13 +366,13 @@ TEST(ReportBeyond, Tk19FormsOrderedByRelmseOnTheGrazingPlane) {
       rows.back().metrics["relmse"] = f.relmse * (std::string(material) == "ggx:0.01" ? 1 : 10);
     }
   const std::string section = BeyondSection(rows);
-  EXPECT_NE(section.find("**quad**, lowest relmse first: TK19 non-axis-aligned 10 < TK19 axis-aligned 20 < K16 "
-                         "axis-aligned 60 < K16 non-axis-aligned, ½U (0.5 px filter) 150 < K16 non-axis-aligned, "
-                         "the slide's bare U 400"),
+  EXPECT_NE(section.find("**bumpy-plane, quad**, lowest relmse first: TK19 non-axis-aligned 10 (+0.00) < TK19 "
+                         "axis-aligned 20 (+0.00) < K16 axis-aligned 60 (+0.00) < K16 non-axis-aligned, ½U (0.5 px "
+                         "filter) 150 (+0.00) < K16 non-axis-aligned, the slide's bare U 400 (+0.00)"),
             std::string::npos)
       << section;
-  EXPECT_NE(section.find("| K16 non-axis-aligned, the slide's bare U | `k16-beckmann-parallelogram sigma2=1` | 400 | "
-                         "+0.000 | 4000 (bumpy-plane / ggx:0.05 / orbit / quad) |"),
+  EXPECT_NE(section.find("| K16 non-axis-aligned, the slide's bare U | `k16-beckmann-parallelogram sigma2=1` | 400 "
+                         "(+0.000) | 4000 (bumpy-plane / ggx:0.05 / orbit / quad) |"),
             std::string::npos)
       << section;
 }

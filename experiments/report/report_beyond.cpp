@@ -82,9 +82,8 @@ void JacobianPart(Document& doc, const std::vector<const Group*>& groups) {
       p->ratio_a.push_back(a->ratio), p->ratio_b.push_back(b->ratio);
       if (std::abs(b->energy_bias) < std::abs(a->energy_bias)) {
         ++p->closer;
-        if (Compare(Ci95(*b->row, "energy_bias"), Ci95(*a->row, "energy_bias")) != Verdict::kIndistinguishable &&
-            Compare(Ci95(*b->row, "energy_bias"), Ci95(*a->row, "energy_bias")) != Verdict::kUnknown)
-          ++p->closer_apart;
+        const Verdict apart = Compare(Ci95(*b->row, "energy_bias"), Ci95(*a->row, "energy_bias"));
+        if (apart == Verdict::kBetter || apart == Verdict::kWorse) ++p->closer_apart;
       }
       switch (Compare(Ci95(*b->row, "tv_err"), Ci95(*a->row, "tv_err"))) {
         case Verdict::kBetter: ++p->lower; break;

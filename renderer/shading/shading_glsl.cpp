@@ -64,6 +64,7 @@ struct Glsl<float> {
     return glsl_f32::evalVariant(v, ndf, a, f, p);
   }
   static float Density(int ndf, glm::vec2 s, glm::vec2 a) { return glsl_f32::slopeDensity(ndf, s, a); }
+  static glm::vec2 ProjectedChange(glm::vec2 s, glm::vec2 ds) { return glsl_f32::projectedHalfVectorChange(s, ds); }
   static float RectSeed(glm::vec2 c, glm::vec2 a, glm::vec2 f) { return glsl_f32::ggxRectMeanSeed(c, a, f); }
   static float RectStable(glm::vec2 c, glm::vec2 a, glm::vec2 f) { return glsl_f32::ggxRectMeanStable(c, a, f); }
   static float RectJacobian(glm::vec2 c, glm::vec2 a, glm::vec2 f) { return glsl_f32::ggxRectMeanJacobian(c, a, f); }
@@ -89,6 +90,9 @@ struct Glsl<double> {
     return glsl_f64::evalVariant(v, ndf, a, f, p);
   }
   static double Density(int ndf, glm::dvec2 s, glm::dvec2 a) { return glsl_f64::slopeDensity(ndf, s, a); }
+  static glm::dvec2 ProjectedChange(glm::dvec2 s, glm::dvec2 ds) {
+    return glsl_f64::projectedHalfVectorChange(s, ds);
+  }
   static double RectSeed(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) { return glsl_f64::ggxRectMeanSeed(c, a, f); }
   static double RectStable(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) { return glsl_f64::ggxRectMeanStable(c, a, f); }
   static double RectJacobian(glm::dvec2 c, glm::dvec2 a, glm::dvec2 f) {
@@ -110,6 +114,13 @@ struct Glsl<double> {
 };
 
 }  // namespace
+
+template <class T>
+Footprint<T> WithChainedProjection(Footprint<T> f) {
+  f.dh_dx = Glsl<T>::ProjectedChange(f.hpp, f.dhpp_dx);
+  f.dh_dy = Glsl<T>::ProjectedChange(f.hpp, f.dhpp_dy);
+  return f;
+}
 
 template <class T>
 FilteredNdf<T> EvaluateVariant(int id, Ndf ndf, glm::vec<2, T> alpha, const Footprint<T>& footprint,
@@ -352,6 +363,7 @@ SHIMMER_INSTANTIATE(double)
 #define SHIMMER_INSTANTIATE(T)                                                                                 \
   template FilteredNdf<T> EvaluateVariant<T>(int, Ndf, glm::vec<2, T>, const Footprint<T>&, const Params<T>&); \
   template T SlopeDensity<T>(Ndf, glm::vec<2, T>, glm::vec<2, T>);                                             \
+  template Footprint<T> WithChainedProjection<T>(Footprint<T>);                                                \
   template FilteredNdf<T> EvaluateGlints<T>(GlintMode, const MaterialDesc&, glm::vec<2, T>,                     \
                                             const GlintFootprint<T>&);                                          \
   template T GlintBinomial<T>(T, T, T, T);                                                                      \

@@ -4,7 +4,6 @@
 
 #include <glm/glm.hpp>
 
-#include <algorithm>
 #include <cmath>
 
 #include "shimmer/core/result.h"
@@ -46,25 +45,10 @@ struct Footprint {
 };
 
 // f with dh_dx, dh_dy from its slope derivatives by the chain rule, as an
-// analytic footprint has them: d h.xy = (ds - s (s . ds) / q) / sqrt(q),
-// q = 1 + |s|^2.
-// The slope and its derivatives are capped as the shading core caps them
-// (SLOPE_MAX, FOOTPRINT_MAX) and the rest is done in double, so that no
-// finite input overflows on the way.
+// analytic footprint has them: the shading core's projectedHalfVectorChange
+// (variants.glsl), slope and derivatives capped as the core caps them.
 template <class T>
-Footprint<T> WithChainedProjection(Footprint<T> f) {
-  glm::dvec2 s(f.hpp);
-  if (const double m = std::max(std::abs(s.x), std::abs(s.y)); m > 1e8) s *= 1e8 / m;
-  const double q = 1 + glm::dot(s, s);
-  const double r = 1 / std::sqrt(q);
-  auto chained = [&](glm::dvec2 ds) {
-    ds = glm::clamp(ds, glm::dvec2(-1e4), glm::dvec2(1e4));
-    return glm::vec<2, T>((ds - s * (glm::dot(s, ds) / q)) * r);
-  };
-  f.dh_dx = chained(glm::dvec2(f.dhpp_dx));
-  f.dh_dy = chained(glm::dvec2(f.dhpp_dy));
-  return f;
-}
+Footprint<T> WithChainedProjection(Footprint<T> f);
 
 template <class T>
 struct Params {

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 
 #include "shimmer/renderer/renderer.h"
@@ -20,10 +21,19 @@ using namespace shimmer;
 
 constexpr int kSize = 512;
 
+// SHIMMER_BENCH_SCENE and SHIMMER_BENCH_MATERIAL (as a spec names them, e.g.
+// "bumpy-plane" and "ggx:0.01") time the frame on another shot: a filter's
+// cost depends on how wide its footprints are against the lobe.
+std::string FromEnvironment(const char* name, const char* fallback) {
+  const char* v = std::getenv(name);
+  return v && *v ? v : fallback;
+}
+
 render::RenderSettings Settings(const std::string& variant) {
   render::RenderSettings s;
-  s.scene = scene::LoadScene("sphere-field").value();
-  s.material = s.scene.material;
+  s.scene = scene::LoadScene(FromEnvironment("SHIMMER_BENCH_SCENE", "sphere-field")).value();
+  const std::string material = FromEnvironment("SHIMMER_BENCH_MATERIAL", "");
+  s.material = material.empty() ? s.scene.material : scene::ParseMaterial(material, s.scene.material).value();
   s.variant = variant;
   s.width = kSize;
   s.height = kSize;

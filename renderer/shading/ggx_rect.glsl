@@ -62,50 +62,84 @@ real ggxRectMeanSeed(vec2 hpp, vec2 roughness, vec2 footprint) {
 // Bound: relative error <= 1e-4 in float32 against a 30-digit oracle over
 // alpha 1e-3..1, half-sides 1e-6..10 (unequal too), centres up to 100 alpha
 // and slopes up to 6 (tests assert 1e-3). Cost: 4 or 8 inner evaluations,
-// each 3 atan2, 2 sin/tan and one sqrt.
+// each one atan and three sqrt (see ggxRectInnerTerms), and a polynomial
+// (4 points) or a tan (8 points) per node.
 
-// atan2(d * c, den) / d for d >= 0, finite as d -> 0.
+// atan2(d * c, den) / d for d >= 0, finite as d -> 0: where the angle is
+// small (den > 0 and t = d c / den < 1e-3, which takes in every d that could
+// underflow) its series, else the arctangent. One arctangent either way, as
+// a select: lavapipe runs both sides of a branch between two forms.
 real atanRatio(real d, real c, real den) {
-  if (den > real(0)) {
-    real t = d * c / den;
-    real r = t < real(1e-3) ? real(1) - t * t / real(3) : atan(t) / t;
-    return c / den * r;
-  }
-  return atan(d * c, den) / d;
+  real t = d * c / den;
+  return (den > real(0) && t < real(1e-3)) ? c / den * (real(1) - t * t / real(3)) : atan(d * c, den) / d;
 }
 
-// (x - sin x) / x, accurate for small x (Taylor series to x^10 below 1,
-// where truncation is below 1e-10 relative).
-real oneMinusSincTimes(real x) {
-  if (x < real(1)) {
-    real x2 = x * x;
-    return x2 * (real(1.0 / 6.0) -
-                 x2 * (real(1.0 / 120.0) -
-                       x2 * (real(1.0 / 5040.0) -
-                             x2 * (real(1.0 / 362880.0) - x2 * real(1.0 / 39916800.0)))));
-  }
-  return (x - sin(x)) / x;
+// (x - sin x) / x for 0 <= x < 1 (Taylor series to x^10, truncation below
+// 1e-10 relative).
+real oneMinusSincTimesSmall(real x) {
+  real x2 = x * x;
+  return x2 * (real(1.0 / 6.0) -
+               x2 * (real(1.0 / 120.0) -
+                     x2 * (real(1.0 / 5040.0) - x2 * (real(1.0 / 362880.0) - x2 * real(1.0 / 39916800.0)))));
+}
+
+// tan x for |x| < 0.3 (Taylor series to x^15; truncation below 1e-11
+// relative). The narrow-angle rules' nodes lie within 0.3 of the footprint's
+// centre angle, and a polynomial there costs a fraction of tan's range
+// reduction and division.
+real tanSmall(real x) {
+  real x2 = x * x;
+  return x + x * x2 * (real(1.0 / 3.0) +
+                       x2 * (real(2.0 / 15.0) +
+                             x2 * (real(17.0 / 315.0) +
+                                   x2 * (real(62.0 / 2835.0) +
+                                         x2 * (real(1382.0 / 155925.0) +
+                                               x2 * (real(21844.0 / 6081075.0) +
+                                                     x2 * real(929569.0 / 638512875.0)))))));
+}
+
+// The inner integrals over w in [wc - fw, wc + fw], with w = c tan(psi):
+//   int dw / (c^2 + w^2)   = dpsi / c
+//   int dw / (c^2 + w^2)^2 = (dpsi + sin(dpsi) cos(psi1 + psi2)) / (2 c^3).
+// Returns vec2(r, B): r = dpsi / (w2 - w1) and
+//   B = a + (1 + cos(psi1 + psi2)) b,  a = (dpsi - sin dpsi) / dpsi,  b = sin(dpsi) / dpsi,
+// so that the means over the interval are r / c and B r / (2 c^3). Both terms
+// of B are non-negative, so nothing cancels. Only dpsi takes an arctangent:
+// sin(dpsi) = 2 fw c / (s1 s2) and cos(psi1 + psi2) = cos1 cos2 - sin1 sin2 are
+// algebraic in the endpoints' cosines c / s_i and sines w_i / s_i
+// (s_i = sqrt(c^2 + w_i^2)), and where sin1 sin2 > 0 the difference
+// 1 - sin1 sin2 = (cos1^2 + cos2^2 sin1^2) / (1 + sin1 sin2) is a sum of
+// squares. (Before, the sum angle took two more atan2 and a sin per call.)
+vec2 ggxRectInnerTerms(real c, real wc, real fw) {
+  wc = abs(wc);  // the integrand is even in w
+  real w1 = wc - fw;
+  real w2 = wc + fw;
+  real r = atanRatio(real(2) * fw, c, c * c + w1 * w2);
+  real dpsi = r * real(2) * fw;
+  real is1 = inversesqrt(c * c + w1 * w1);
+  real is2 = inversesqrt(c * c + w2 * w2);
+  real cos1 = c * is1;
+  real cos2 = c * is2;
+  real sin1 = w1 * is1;
+  real sin2 = w2 * is2;
+  real b = cos1 * cos2 / (c * r);
+  real a = dpsi < real(1) ? oneMinusSincTimesSmall(dpsi) : real(1) - b;
+  real ss = sin1 * sin2;
+  real oneMinusSs = ss > real(0) ? (cos1 * cos1 + cos2 * cos2 * sin1 * sin1) / (real(1) + ss) : real(1) - ss;
+  return vec2(r, a + (cos1 * cos2 + oneMinusSs) * b);
 }
 
 // Mean over w in [wc - fw, wc + fw] of (c^2 + w^2)^-2.
 real ggxRectInnerMean(real c, real wc, real fw) {
-  wc = abs(wc);  // the integrand is even in w
-  real w1 = wc - fw;
-  real w2 = wc + fw;
-  real r = atanRatio(real(2) * fw, c, c * c + w1 * w2);  // dpsi / dw
-  real dpsi = r * real(2) * fw;
-  real a = oneMinusSincTimes(dpsi);                     // (dpsi - sin dpsi) / dpsi
-  real b = real(1) - a;                                  // sin dpsi / dpsi
-  real cosHalfSum = sin(real(0.5) * (atan(c, w1) + atan(c, w2)));
-  return (a + real(2) * cosHalfSum * cosHalfSum * b) * r / (real(2) * c * c * c);
+  vec2 t = ggxRectInnerTerms(c, wc, fw);
+  return t.y * t.x / (real(2) * c * c * c);
 }
 
 // One Gauss-Legendre node of the outer integral over u, at angle offset
-// delta from phi_m = atan(uc / C); written so that u - uc keeps full relative
-// precision far from the origin.
-real ggxRectOuterNode(real delta, real uc, real C, real wc, real fw) {
+// delta from phi_m = atan(uc / C), tau = tan(delta); written so that u - uc
+// keeps full relative precision far from the origin.
+real ggxRectOuterNode(real tau, real uc, real C, real wc, real fw) {
   real tm = uc / C;
-  real tau = tan(delta);
   real u = uc + C * tau * (real(1) + tm * tm) / (real(1) - tm * tau);
   real c = sqrt(real(1) + u * u);
   real jacobian = (C * C + u * u) / C;  // du / dphi
@@ -115,19 +149,38 @@ real ggxRectOuterNode(real delta, real uc, real C, real wc, real fw) {
 // Distance from 0 to the interval [xc - f, xc + f] (0 when it contains 0).
 real intervalNear(real xc, real f) { return max(abs(xc) - f, real(0)); }
 
+// Whether the normalised rectangle is narrower in angle along w than along u
+// (the direction the outer rule then integrates over): atan2(yW, xW) <
+// atan2(yU, xU) for the widths' half-plane vectors (y >= 0), compared as a
+// cross product of the vectors scaled to unit 1-norm (so the products stay
+// finite in float), without the arctangents.
+bool narrowerAlongW(real uc, real wc, real fu, real fw) {
+  real Cu = sqrt(real(1) + sqr(intervalNear(wc, fw)));
+  real Cw = sqrt(real(1) + sqr(intervalNear(uc, fu)));
+  real yU = real(2) * fu * Cu;
+  real xU = Cu * Cu + (uc - fu) * (uc + fu);
+  real yW = real(2) * fw * Cw;
+  real xW = Cw * Cw + (wc - fw) * (wc + fw);
+  real nU = abs(xU) + yU;  // > 0: xU >= 1 where yU = 0
+  real nW = abs(xW) + yW;
+  return (xW / nW) * (yU / nU) > (yW / nW) * (xU / nU);
+}
+
+// dphi / du over [uc - fu, uc + fu] after u = C tan(phi), from the angles
+// d1 <= 0 <= d2 of the ends (a sum of magnitudes: no cancellation); the
+// limit C / (C^2 + uc^2) for a vanishing side.
+real anglePerSlope(real d1, real d2, real uc, real fu, real C) {
+  return fu > real(1e-12) ? (d2 - d1) / (real(2) * fu) : C / (C * C + uc * uc);
+}
+
 real ggxRectMeanNormalized(real uc, real wc, real fu, real fw) {
   uc = abs(uc);
   wc = abs(wc);
-  real Cu = sqrt(real(1) + sqr(intervalNear(wc, fw)));
-  real Cw = sqrt(real(1) + sqr(intervalNear(uc, fu)));
-  real phiWidthU = atan(real(2) * fu * Cu, Cu * Cu + (uc - fu) * (uc + fu));
-  real phiWidthW = atan(real(2) * fw * Cw, Cw * Cw + (wc - fw) * (wc + fw));
-  if (phiWidthW < phiWidthU) {  // integrate numerically over the narrower direction
+  if (narrowerAlongW(uc, wc, fu, fw)) {  // integrate numerically over the narrower direction
     real t = uc; uc = wc; wc = t;
     t = fu; fu = fw; fw = t;
-    Cu = Cw;
   }
-  real C = Cu;
+  real C = sqrt(real(1) + sqr(intervalNear(wc, fw)));
   real d1 = -atan(fu * C, C * C + (uc - fu) * uc);
   real d2 = atan(fu * C, C * C + uc * (uc + fu));
   real mid = real(0.5) * (d1 + d2);
@@ -135,25 +188,31 @@ real ggxRectMeanNormalized(real uc, real wc, real fu, real fw) {
   real sum;
   if (d2 - d1 < real(0.3)) {
     // Narrow in angle (the common case: footprints smaller than the lobe):
-    // 4-point Gauss-Legendre already meets the bound.
+    // 4-point Gauss-Legendre already meets the bound. Every node lies within
+    // 0.3 of the centre angle (d1 <= 0 <= d2), where tanSmall holds.
     real y0 = real(0.3399810435848563), h0 = real(0.6521451548625461);
     real y1 = real(0.8611363115940526), h1 = real(0.3478548451374538);
-    sum = h0 * (ggxRectOuterNode(mid - half_ * y0, uc, C, wc, fw) + ggxRectOuterNode(mid + half_ * y0, uc, C, wc, fw)) +
-          h1 * (ggxRectOuterNode(mid - half_ * y1, uc, C, wc, fw) + ggxRectOuterNode(mid + half_ * y1, uc, C, wc, fw));
+    sum = h0 * (ggxRectOuterNode(tanSmall(mid - half_ * y0), uc, C, wc, fw) +
+                ggxRectOuterNode(tanSmall(mid + half_ * y0), uc, C, wc, fw)) +
+          h1 * (ggxRectOuterNode(tanSmall(mid - half_ * y1), uc, C, wc, fw) +
+                ggxRectOuterNode(tanSmall(mid + half_ * y1), uc, C, wc, fw));
   } else {
     // 8-point Gauss-Legendre nodes and weights on [-1, 1].
     real x0 = real(0.1834346424956498), g0 = real(0.3626837833783620);
     real x1 = real(0.5255324099163290), g1 = real(0.3137066458778873);
     real x2 = real(0.7966664774136267), g2 = real(0.2223810344533745);
     real x3 = real(0.9602898564975363), g3 = real(0.1012285362903763);
-    sum = g0 * (ggxRectOuterNode(mid - half_ * x0, uc, C, wc, fw) + ggxRectOuterNode(mid + half_ * x0, uc, C, wc, fw)) +
-          g1 * (ggxRectOuterNode(mid - half_ * x1, uc, C, wc, fw) + ggxRectOuterNode(mid + half_ * x1, uc, C, wc, fw)) +
-          g2 * (ggxRectOuterNode(mid - half_ * x2, uc, C, wc, fw) + ggxRectOuterNode(mid + half_ * x2, uc, C, wc, fw)) +
-          g3 * (ggxRectOuterNode(mid - half_ * x3, uc, C, wc, fw) + ggxRectOuterNode(mid + half_ * x3, uc, C, wc, fw));
+    sum = g0 * (ggxRectOuterNode(tan(mid - half_ * x0), uc, C, wc, fw) +
+                ggxRectOuterNode(tan(mid + half_ * x0), uc, C, wc, fw)) +
+          g1 * (ggxRectOuterNode(tan(mid - half_ * x1), uc, C, wc, fw) +
+                ggxRectOuterNode(tan(mid + half_ * x1), uc, C, wc, fw)) +
+          g2 * (ggxRectOuterNode(tan(mid - half_ * x2), uc, C, wc, fw) +
+                ggxRectOuterNode(tan(mid + half_ * x2), uc, C, wc, fw)) +
+          g3 * (ggxRectOuterNode(tan(mid - half_ * x3), uc, C, wc, fw) +
+                ggxRectOuterNode(tan(mid + half_ * x3), uc, C, wc, fw));
   }
-  // mean = (1 / du) * (dphi / 2) * sum, with dphi / du formed as a ratio.
-  real dphiPerDu = atanRatio(real(2) * fu, C, C * C + (uc - fu) * (uc + fu));
-  return real(0.5) * dphiPerDu * sum;
+  // mean = (1 / du) * (dphi / 2) * sum.
+  return real(0.5) * anglePerSlope(d1, d2, uc, fu, C) * sum;
 }
 
 real ggxRectMeanStable(vec2 hpp, vec2 roughness, vec2 footprint) {
@@ -202,97 +261,104 @@ real ggxRectMeanStable(vec2 hpp, vec2 roughness, vec2 footprint) {
 //
 // Bound: relative error <= 1e-4 in float32 against a double adaptive
 // quadrature over the stable rect's grid (tests/shading/ggx_rect_test.cpp;
-// measured 4.8e-7 there, 2.7e-5 over 20000 random rectangles with slopes to
-// 8 and anisotropy to 1000:1).
-// Cost: as the stable rect for narrow footprints (4 inner evaluations); wide
-// ones take 8 per panel, a panel per decade of footprint size over the lobe's
-// on each side of it (64 for a footprint 1e4 lobe widths across).
-
-// Means over w in [wc - fw, wc + fw] of c^2 / (c^2 + w^2) and c^4 / (c^2 + w^2)^2,
-// i.e. of 1 / q and 1 / q^2 scaled by c^2 and c^4 so that both stay near 1
-// wherever they matter and neither overflows nor underflows in float.
-vec2 ggxRectJacobianInnerMeans(real c, real wc, real fw) {
-  wc = abs(wc);
-  real w1 = wc - fw;
-  real w2 = wc + fw;
-  real r = atanRatio(real(2) * fw, c, c * c + w1 * w2);  // dpsi / dw
-  real dpsi = r * real(2) * fw;
-  real a = oneMinusSincTimes(dpsi);
-  real b = real(1) - a;
-  real cosHalfSum = sin(real(0.5) * (atan(c, w1) + atan(c, w2)));
-  return vec2(r * c, (a + real(2) * cosHalfSum * cosHalfSum * b) * r * c * real(0.5));
-}
+// measured 4.8e-7 there, 4.8e-6 over the 3000 random rectangles of
+// GgxRectJacobian.RandomRectangles*, with slopes to 8 and anisotropy to
+// 1000:1).
+// Cost: 4 inner evaluations (one atan each, ggxRectInnerTerms) for narrow
+// footprints; wide ones take 8 per panel, a panel per decade of footprint size
+// over the lobe's on each side of it (64 for a footprint 1e4 lobe widths
+// across). docs/renderer.md has the measurements.
 
 // Mean over w of (m + A / q)^2 - m^2 at outer coordinate u (see above).
 real ggxRectJacobianRow(real u, real wc, real fw, real m, real e) {
+  // The means over w of c^2 / q and c^4 / q^2 (ggxRectInnerTerms' r c and
+  // B r c / 2): 1 / q and 1 / q^2 scaled so that both stay near 1 wherever
+  // they matter and neither overflows nor underflows in float.
   real c2 = real(1) + u * u;
-  vec2 means = ggxRectJacobianInnerMeans(sqrt(c2), wc, fw);
+  real c = sqrt(c2);
+  vec2 t = ggxRectInnerTerms(c, wc, fw);
   real k = (real(1) - m + e * u * u) / c2;  // A / c^2, bounded by max(1 - m, e)
-  return real(2) * m * k * means.x + k * k * means.y;
+  return k * t.x * c * (real(2) * m + real(0.5) * k * t.y);
 }
 
-// Tangent-substitution node, as ggxRectOuterNode.
-real ggxRectJacobianTanNode(real delta, real uc, real C, real wc, real fw, real m, real e) {
-  real tm = uc / C;
-  real tau = tan(delta);
-  real u = uc + C * tau * (real(1) + tm * tm) / (real(1) - tm * tau);
-  return ggxRectJacobianRow(u, wc, fw, m, e) * ((C * C + u * u) / C);
+// One node of the outer rule at t: the tangent substitution u = uc + C tan-offset
+// (t an angle offset from phi_m = atan(uc / C), as ggxRectOuterNode) or the
+// sinh substitution u = C sinh(t); returns the row times du / dt. Both sides
+// are cheap: lavapipe runs both for a SIMD batch whose lanes disagree.
+real ggxRectJacobianNode(bool tanRule, real t, real uc, real C, real wc, real fw, real m, real e) {
+  real u;
+  real dudt;
+  if (tanRule) {
+    real tm = uc / C;
+    real tau = tanSmall(t);
+    u = uc + C * tau * (real(1) + tm * tm) / (real(1) - tm * tau);
+    dudt = (C * C + u * u) / C;
+  } else {
+    real E = exp(t);  // |t| <= asinh(1e12 / C) < 29: finite in float
+    real invE = real(1) / E;
+    u = real(0.5) * C * (E - invE);
+    dudt = real(0.5) * C * (E + invE);
+  }
+  return ggxRectJacobianRow(u, wc, fw, m, e) * dudt;
 }
 
+// Panel width in xi of the sinh rule's 8-point panels, the tangent rule's
+// pole margin, and the panel cap.
 const real XI_PANEL = real(2.5);
 const real TAN_POLE_WIDTHS = real(2);
 const int XI_PANELS_MAX = 32;
 
-real ggxRectJacobianSinhNode(real xi, real C, real wc, real fw, real m, real e) {
-  real u = C * sinh(xi);
-  return ggxRectJacobianRow(u, wc, fw, m, e) * sqrt(C * C + u * u);
-}
-
 // Mean over the normalised rectangle of (m + A / q)^2 - m^2, u the outer axis.
+// Both rules run in one loop of 4 nodes per pass: the tangent rule's 4-point
+// panel in one pass, each 8-point panel of the sinh rule in two (its inner
+// and outer node pairs). A SIMD batch of narrow footprints, the common case,
+// then pays 4 rows and nothing for the wide footprints' rule: lavapipe runs
+// every branch of a batch, and the sinh rule written out beside the tangent
+// rule cost more than the rule the batch took (measured on sphere-field:
+// 1.35x none with the sinh rule present but never taken, 1.16x without it).
 real ggxRectJacobianOuterMean(real uc, real wc, real fu, real fw, real m, real e) {
   uc = abs(uc);  // the integrand is even in u and in w
   real C = sqrt(real(1) + sqr(intervalNear(wc, fw)));
   real d1 = -atan(fu * C, C * C + (uc - fu) * uc);
   real d2 = atan(fu * C, C * C + uc * (uc + fu));
   // atan(C, uc + fu): the far end's angular distance from the pole at pi / 2.
-  if (d2 - d1 < real(0.3) && atan(C, uc + fu) > TAN_POLE_WIDTHS * (d2 - d1)) {
-    real mid = real(0.5) * (d1 + d2);
-    real half_ = real(0.5) * (d2 - d1);
-    real y0 = real(0.3399810435848563), h0 = real(0.6521451548625461);
-    real y1 = real(0.8611363115940526), h1 = real(0.3478548451374538);
-    real sum = h0 * (ggxRectJacobianTanNode(mid - half_ * y0, uc, C, wc, fw, m, e) +
-                     ggxRectJacobianTanNode(mid + half_ * y0, uc, C, wc, fw, m, e)) +
-               h1 * (ggxRectJacobianTanNode(mid - half_ * y1, uc, C, wc, fw, m, e) +
-                     ggxRectJacobianTanNode(mid + half_ * y1, uc, C, wc, fw, m, e));
-    real dphiPerDu = atanRatio(real(2) * fu, C, C * C + (uc - fu) * (uc + fu));
-    return real(0.5) * dphiPerDu * sum;
+  bool tanRule = d2 - d1 < real(0.3) && atan(C, uc + fu) > TAN_POLE_WIDTHS * (d2 - d1);
+  real start = d1;
+  real h = d2 - d1;
+  real scale;  // the rule's weighted sum times this is the mean
+  int passes = 1;
+  if (tanRule) {
+    // Every node lies within 0.3 of phi_m (d1 <= 0 <= d2), where tanSmall holds.
+    scale = real(0.5) * anglePerSlope(d1, d2, uc, fu, C);
+  } else {
+    // The sinh scale: the lobe's C, or below it where A = 1 - m + e u^2 turns
+    // from its constant to its quadratic part (u^2 = (1 - m) / e), which the
+    // panels must resolve as well.
+    if (e > real(0)) C = clamp(sqrt(max(real(1) - m, real(0)) / e), real(1), C);
+    start = asinh((uc - fu) / C);
+    real xi2 = asinh((uc + fu) / C);
+    int panels = clamp(int(ceil((xi2 - start) / XI_PANEL)), 1, XI_PANELS_MAX);
+    h = (xi2 - start) / real(panels);
+    scale = real(0.25) * h / fu;
+    passes = 2 * panels;
   }
-  // The sinh scale: the lobe's C, or below it where A = 1 - m + e u^2 turns
-  // from its constant to its quadratic part (u^2 = (1 - m) / e), which the
-  // panels must resolve as well.
-  if (e > real(0)) C = clamp(sqrt(max(real(1) - m, real(0)) / e), real(1), C);
-  real xi1 = asinh((uc - fu) / C);
-  real xi2 = asinh((uc + fu) / C);
-  int panels = clamp(int(ceil((xi2 - xi1) / XI_PANEL)), 1, XI_PANELS_MAX);
-  real h = (xi2 - xi1) / real(panels);
-  real x0 = real(0.1834346424956498), g0 = real(0.3626837833783620);
-  real x1 = real(0.5255324099163290), g1 = real(0.3137066458778873);
-  real x2 = real(0.7966664774136267), g2 = real(0.2223810344533745);
-  real x3 = real(0.9602898564975363), g3 = real(0.1012285362903763);
+  real half_ = real(0.5) * h;
   real sum = real(0);
-  for (int i = 0; i < panels; ++i) {
-    real mid = xi1 + (real(i) + real(0.5)) * h;
-    real half_ = real(0.5) * h;
-    sum += g0 * (ggxRectJacobianSinhNode(mid - half_ * x0, C, wc, fw, m, e) +
-                 ggxRectJacobianSinhNode(mid + half_ * x0, C, wc, fw, m, e)) +
-           g1 * (ggxRectJacobianSinhNode(mid - half_ * x1, C, wc, fw, m, e) +
-                 ggxRectJacobianSinhNode(mid + half_ * x1, C, wc, fw, m, e)) +
-           g2 * (ggxRectJacobianSinhNode(mid - half_ * x2, C, wc, fw, m, e) +
-                 ggxRectJacobianSinhNode(mid + half_ * x2, C, wc, fw, m, e)) +
-           g3 * (ggxRectJacobianSinhNode(mid - half_ * x3, C, wc, fw, m, e) +
-                 ggxRectJacobianSinhNode(mid + half_ * x3, C, wc, fw, m, e));
+  for (int i = 0; i < passes; ++i) {
+    // Gauss-Legendre nodes and weights on [-1, 1]: 4 points, or the inner
+    // (even pass) and outer (odd pass) pairs of 8 points.
+    bool outerPair = (i - (i / 2) * 2) == 1;
+    real ya = tanRule ? real(0.3399810435848563) : (outerPair ? real(0.7966664774136267) : real(0.1834346424956498));
+    real wa = tanRule ? real(0.6521451548625461) : (outerPair ? real(0.2223810344533745) : real(0.3626837833783620));
+    real yb = tanRule ? real(0.8611363115940526) : (outerPair ? real(0.9602898564975363) : real(0.5255324099163290));
+    real wb = tanRule ? real(0.3478548451374538) : (outerPair ? real(0.1012285362903763) : real(0.3137066458778873));
+    real mid = tanRule ? real(0.5) * (d1 + d2) : start + (real(i / 2) + real(0.5)) * h;
+    sum += wa * (ggxRectJacobianNode(tanRule, mid - half_ * ya, uc, C, wc, fw, m, e) +
+                 ggxRectJacobianNode(tanRule, mid + half_ * ya, uc, C, wc, fw, m, e)) +
+           wb * (ggxRectJacobianNode(tanRule, mid - half_ * yb, uc, C, wc, fw, m, e) +
+                 ggxRectJacobianNode(tanRule, mid + half_ * yb, uc, C, wc, fw, m, e));
   }
-  return real(0.5) * h * sum / (real(2) * fu);
+  return scale * sum;
 }
 
 // pi ax ay times the footprint mean of P22(s) (1 + |s|^2)^2, in normalised
@@ -306,11 +372,7 @@ real ggxRectJacobianMeanNormalized(real uc, real wc, real fu, real fw, real ax2,
   if (e > real(0)) {
     swapAxes = ay2 > ax2;  // the rougher axis is the outer one (see above)
   } else {  // isotropic: integrate numerically over the narrower direction in angle
-    real Cu = sqrt(real(1) + sqr(intervalNear(wc, fw)));
-    real Cw = sqrt(real(1) + sqr(intervalNear(uc, fu)));
-    real phiWidthU = atan(real(2) * fu * Cu, Cu * Cu + (uc - fu) * (uc + fu));
-    real phiWidthW = atan(real(2) * fw * Cw, Cw * Cw + (wc - fw) * (wc + fw));
-    swapAxes = phiWidthW < phiWidthU;
+    swapAxes = narrowerAlongW(uc, wc, fu, fw);
   }
   if (swapAxes) {
     real t = uc; uc = wc; wc = t;

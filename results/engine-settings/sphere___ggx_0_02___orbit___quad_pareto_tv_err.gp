@@ -11,5 +11,5 @@ plot 'sphere___ggx_0_02___orbit___quad_pareto.dat' index 0 using 1:2 with points
      'sphere___ggx_0_02___orbit___quad_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
      keyentry with points pt 6 lc rgb '#d62728' title '1: vlachos15', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: none', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: godot', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: filament', \
      keyentry with points pt 6 lc rgb '#d62728' title '4: unity-hdrp'

@@ -1,12 +1,13 @@
-// `shimmer prune DB [--dry-run]`: removes the rows older shading cores left
-// in a results store (a changed core moves every job id, and the old rows
-// would otherwise stay in the file for good).
+// `shimmer prune DB [--dry-run]`: removes the rows older code or content left
+// in a results store (a changed kernel moves the ids of its jobs, and the old
+// rows would otherwise stay in the file for good).
 #include <cstdio>
 #include <filesystem>
 
 #include "commands.h"
 #include "shimmer/experiments/job.h"
 #include "shimmer/experiments/result_store.h"
+#include "shimmer/experiments/runner.h"
 
 namespace shimmer::cli {
 
@@ -14,7 +15,8 @@ void AddPruneCommand(CLI::App& app) {
   auto db = std::make_shared<std::string>();
   auto dry_run = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand(
-      "prune", "Remove a results store's rows of older shading cores (external sequences are kept)");
+      "prune", "Remove a results store's rows that this shimmer would not make as they are (older kernels, metrics or "
+      "content; external sequences are kept)");
   cmd->add_option("db", *db, "Results store (from shimmer run)")->required();
   cmd->add_flag("--dry-run", *dry_run, "Count what would be removed; change nothing");
   cmd->callback([db, dry_run] {
@@ -27,13 +29,16 @@ void AddPruneCommand(CLI::App& app) {
       using Mode = experiments::ResultStore::Mode;
       auto store = experiments::ResultStore::Open(*db, *dry_run ? Mode::kReadOnly : Mode::kReadWrite);
       if (!store) return store.failure();
-      return (*store)->PruneOtherCores(experiments::ShadingCoreVersion(), *dry_run);
+      auto rows = (*store)->All();
+      if (!rows) return rows.failure();
+      const experiments::CurrentRowSet current = experiments::FindCurrentRows(*rows);
+      return (*store)->PruneStale(current.jobs, current.costs, *dry_run);
     }();
     lock->Discard();
     const auto p = Take(std::move(pruned));
-    std::printf("%s: %s %zu jobs of %zu older shading cores, %zu convergence checks and %zu benchmark costs; "
+    std::printf("%s: %s %zu jobs of older code or content, %zu convergence checks and %zu benchmark costs; "
                 "%zu jobs kept (%zu external)\n",
-                db->c_str(), *dry_run ? "would remove" : "removed", p.jobs, p.cores, p.shots, p.benchmarks,
+                db->c_str(), *dry_run ? "would remove" : "removed", p.jobs, p.shots, p.benchmarks,
                 p.kept_jobs, p.kept_external);
   });
 }

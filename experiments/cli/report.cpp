@@ -71,7 +71,9 @@ void AddReportCommand(CLI::App& app) {
     if (o->slow < 1 || o->slow > 100) throw UsageError("--slow must be 1..100, got " + std::to_string(o->slow));
     auto store = Take(experiments::ResultStore::Open(o->db, experiments::ResultStore::Mode::kReadOnly));
     std::string note;
-    const auto rows = experiments::RowsOfCore(Take(store->All()), experiments::ShadingCoreVersion(), &note);
+    auto all = Take(store->All());
+    const experiments::CurrentRowSet current = experiments::FindCurrentRows(all);
+    const auto rows = experiments::CurrentRows(std::move(all), current.jobs, &note);
     if (rows.empty()) throw UsageError(o->db + ": the results store has no finished jobs");
     std::vector<experiments::JointFit> engine_fits;
     for (const std::string& f : o->fits)

@@ -23,7 +23,20 @@ struct RunCliOptions {
   std::string device;
   bool no_benchmark = false;
   bool no_check = false;
+  bool dry_run = false;
 };
+
+// The jobs a run would compute, each with why; nothing is rendered or written.
+void PrintPlan(const std::string& spec, const std::string& shard, const experiments::RunPlan& plan) {
+  std::printf("%s: %zu jobs in shard %s would run, %d are done\n", spec.c_str(),
+              plan.to_run.size(), shard.c_str(), plan.done);
+  for (const experiments::PlannedJob& p : plan.to_run) {
+    std::string why;
+    for (const std::string& w : p.why) why += (why.empty() ? "" : "; ") + w;
+    std::printf("  %s  %s %s %s %s %s: %s\n", p.id.c_str(), p.job.scene.c_str(), p.job.material.c_str(),
+                p.job.camera.c_str(), p.job.variant.c_str(), p.job.derivatives.c_str(), why.c_str());
+  }
+}
 
 std::string Duration(double s) {
   char buf[32];
@@ -61,6 +74,16 @@ void Run(const RunCliOptions& o) {
   const bool tty = isatty(fileno(stderr));
   ro.progress = [tty](const experiments::RunProgress& p) { PrintProgress(p, tty); };
   const auto jobs = experiments::ExpandJobs(spec);
+  const experiments::RunPlan plan = Take(experiments::PlanRun(jobs, ro));
+  if (o.dry_run) {
+    PrintPlan(spec.name, o.shard, plan);
+    return;
+  }
+  if (plan.legacy_rows)
+    std::fprintf(stderr,
+                 "shimmer: %s: %zu rows were keyed by the shading core's text (before per-kernel job ids); their "
+                 "jobs run once more, and `shimmer prune %s` removes the old rows afterwards\n",
+                 ro.db_path.c_str(), plan.legacy_rows, ro.db_path.c_str());
   const experiments::RunSummary s = experiments::RunJobs(jobs, ro);
   if (s.error) throw CommandError(*s.error);
   dirs.Keep();
@@ -104,6 +127,9 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_flag("--no-benchmark", o->no_benchmark, "Skip the timing renders of the spec's benchmark section");
   cmd->add_flag("--no-check", o->no_check,
                 "Skip the convergence check of each shot's reference (twice the samples per axis)");
+  cmd->add_flag("--dry-run", o->dry_run,
+                "List the jobs a run would compute and why (new job, kernel of a variant changed, content or "
+                "metrics version changed); render and write nothing");
   cmd->callback([o] { Run(*o); });
 }
 

@@ -264,19 +264,28 @@ std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<
   return front;
 }
 
-std::vector<JobResult> RowsOfCore(std::vector<JobResult> rows, const std::string& current, std::string* note) {
+std::vector<JobResult> CurrentRows(std::vector<JobResult> rows, const std::set<std::string>& current,
+                                   std::string* note) {
   // An external sequence's row measures frames shimmer did not render: no
-  // core made it, and its id does not move with one.
-  std::set<std::string> cores;
-  for (const JobResult& r : rows)
-    if (!r.job.external) cores.insert(r.core_version);
-  if (cores.size() < 2 || !cores.count(current)) return rows;
+  // kernel made it, and its id does not move with one.
+  auto is_current = [&](const JobResult& r) { return r.job.external || current.count(r.id) > 0; };
+  const std::size_t kept = std::size_t(std::count_if(rows.begin(), rows.end(), is_current));
+  const std::size_t external =
+      std::size_t(std::count_if(rows.begin(), rows.end(), [](const JobResult& r) { return bool(r.job.external); }));
+  if (kept == rows.size()) return rows;
+  if (kept == external) {
+    if (note)
+      *note = "no row of the store is one this shimmer would make (code or content changed since it ran): the "
+              "report shows all " +
+              std::to_string(rows.size()) + "; run the spec again to bring them up to date";
+    return rows;
+  }
   const std::size_t before = rows.size();
-  std::erase_if(rows, [&](const JobResult& r) { return !r.job.external && r.core_version != current; });
+  std::erase_if(rows, [&](const JobResult& r) { return !is_current(r); });
   if (note)
-    *note = "the store holds rows of " + std::to_string(cores.size()) + " shading-core versions: the report shows the " +
-            std::to_string(rows.size()) + " of this shimmer's core (" + current + ") and leaves out " +
-            std::to_string(before - rows.size()) + " older ones";
+    *note = "the store holds " + std::to_string(before - rows.size()) +
+            " rows made by other code or content than this shimmer's: the report shows the " +
+            std::to_string(rows.size()) + " current ones and leaves those out (shimmer prune removes them)";
   return rows;
 }
 

@@ -58,6 +58,28 @@ std::vector<BenchmarkBatch> BenchmarkBatches(const std::vector<Job>& jobs) {
   return batches;
 }
 
+std::string BenchmarkKernels(const BenchmarkBatch& batch, std::size_t k) {
+  auto kernel = [](const Job& job) {
+    auto sources = SourcesOf(job);
+    return sources ? sources->test.kernel : std::string("unresolved");
+  };
+  return Fnv1a64Hex(kernel(batch.jobs[k]) + '\0' + kernel(batch.jobs.front()));
+}
+
+CurrentRowSet FindCurrentRows(const std::vector<JobResult>& rows) {
+  CurrentRowSet current;
+  std::vector<Job> jobs;
+  for (const JobResult& r : rows) {
+    if (r.sources.is_null() && !r.job.external) ++current.legacy;
+    if (r.job.external || JobId(r.job) != r.id) continue;
+    current.jobs.insert(r.id);
+    jobs.push_back(r.job);
+  }
+  for (const BenchmarkBatch& batch : BenchmarkBatches(jobs))
+    for (std::size_t k = 0; k < batch.jobs.size(); ++k) current.costs.insert(BenchmarkKernels(batch, k));
+  return current;
+}
+
 Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, const BenchmarkOptions& bench,
                                                 const RunOptions& options) {
   using R = Result<std::vector<BenchmarkCost>>;
@@ -103,7 +125,7 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
     c.max_ms = *std::max_element(ms[k].begin(), ms[k].end());
     c.none_median_ms = none_ms;
     c.ratio_to_none = none_ms > 0 ? c.median_ms / none_ms : 0;
-    c.core = ShadingCoreVersion();
+    c.core = BenchmarkKernels(batch, k);
     c.device = renderers[k]->device_name();
     c.driver = renderers[k]->device_driver();
     costs.push_back(std::move(c));

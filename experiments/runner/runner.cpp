@@ -53,11 +53,10 @@ fs::path ReferenceDirectory(const Job& job, const RunOptions& options) {
 }
 
 Result<render::RenderSettings> ReferenceSettings(const Job& job, const RunOptions& options) {
-  auto reference = JobSettings(AsNone(job), options);
+  auto reference = ReferenceSettingsOf(job);
   if (!reference) return reference.failure();
-  reference->reference_spp = job.reference.spp;
-  reference->reference_tolerance = job.reference.tolerance;
-  reference->reference_replicates = job.reference.replicates;
+  reference->device = options.device;
+  reference->compress_exr = options.keep_frames;
   return reference;
 }
 
@@ -102,6 +101,7 @@ Result<JobResult> MeasureExternal(const Job& job) {
   r.reference_id = ReferenceId(job);
   r.job = job;
   r.metrics = metrics::ToJson(*report);
+  if (auto sources = SourcesOf(job)) r.sources = sources->ToJson();
   r.gpu_ms_per_frame = job.external->ms_per_frame;
   r.revision = render::SourceRevision();
   r.device = job.external->device;
@@ -111,39 +111,10 @@ Result<JobResult> MeasureExternal(const Job& job) {
 }
 
 Result<render::RenderSettings> JobSettings(const Job& job, const RunOptions& options) {
-  using R = Result<render::RenderSettings>;
-  render::RenderSettings s;
-  auto scene = scene::LoadScene(job.scene);
-  if (!scene) return Prefixed("scene", scene.failure());
-  auto material = scene::ParseMaterial(job.material, scene->material);
-  if (!material) return material.failure();
-  const auto camera = scene::ParseCameraPath(job.camera);
-  if (!camera) return R::Failure("camera: unknown camera path '" + job.camera + "'");
-  const auto derivatives = shading::ParseDerivativeSource(job.derivatives);
-  if (!derivatives)
-    return R::Failure("derivatives: '" + job.derivatives + "' must be " + std::string(shading::kDerivativeSourceList));
-  s.scene = *scene;
-  s.material = *material;
-  s.camera = *camera;
-  s.fps = job.fps;
-  s.width = job.width;
-  s.height = job.height;
-  s.frames = job.frames;
-  s.variant = job.variant;
-  s.param_overrides.assign(job.params.begin(), job.params.end());
-  if (!job.variant_hash.empty()) {
-    // The id promised this content: a file edited since the spec was read
-    // would store other numbers under it.
-    auto user = shading::LoadUserVariant(job.variant_file);
-    if (!user) return user.failure();
-    if (user->content_hash != job.variant_hash)
-      return R::Failure(job.variant_file + ": the variant file changed since the spec was read; run again");
-    s.variant_file = job.variant_file;
-  }
-  s.derivatives = *derivatives;
-  s.device = options.device;
-  s.compress_exr = options.keep_frames;  // else measured once and deleted
-  if (Status v = render::ValidateSettings(s); !v) return v.failure();
+  auto s = RenderSettingsOf(job);
+  if (!s) return s.failure();
+  s->device = options.device;
+  s->compress_exr = options.keep_frames;  // else measured once and deleted
   return s;
 }
 
@@ -163,7 +134,7 @@ Result<JobFrames> EnsureJobFrames(const Job& job, const RunOptions& options) {
   auto test = JobSettings(job, options);
   if (!test) return test.failure();
   if (Status s = EnsureReference(job, options); !s) return s.failure();
-  const fs::path dir = fs::path(options.work_dir) / ("job-" + JobId(job));
+  const fs::path dir = fs::path(options.work_dir) / ("job-" + FramesId(job));
   if (auto rendered = RenderInto(*test, dir); !rendered) return rendered.failure();
   return JobFrames{dir.string(), ReferenceDirectory(job, options).string()};
 }
@@ -173,21 +144,23 @@ Result<JobResult> MeasureJob(const Job& job, const RunOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   auto test = JobSettings(job, options);
   if (!test) return test.failure();
-  const std::string id = JobId(job), ref_id = ReferenceId(job);
-  const fs::path job_dir = fs::path(options.work_dir) / ("job-" + id);
+  auto sources = SourcesOf(job);
+  if (!sources) return sources.failure();
+  const fs::path job_dir = fs::path(options.work_dir) / ("job-" + FramesIdFrom(job, *sources));
   if (Status s = EnsureReference(job, options); !s) return s.failure();
   auto rendered = RenderInto(*test, job_dir);
   if (!rendered) return rendered.failure();
   auto report = MeasureAgainst(job, job_dir, ReferenceDirectory(job, options), {});
   if (!report) return report.failure();
   JobResult r;
-  r.id = id;
-  r.reference_id = ref_id;
+  r.id = JobIdFrom(job, *sources);
+  r.reference_id = ReferenceIdFrom(job, *sources);
   r.job = job;
   r.metrics = metrics::ToJson(*report);
   r.gpu_ms_per_frame = rendered->MeanGpuMs();
   r.revision = render::SourceRevision();
-  r.core_version = ShadingCoreVersion();
+  r.core_version = sources->test.kernel;
+  r.sources = sources->ToJson();
   r.device = rendered->device;
   r.driver = rendered->driver;
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -265,16 +238,20 @@ std::string BenchmarkDevice(const RunOptions& options) {
 }
 
 // Whether the store already has every variant of the batch timed on this
-// device by this shading core (a core change moves costs as it moves ids).
+// device with the kernels it runs now (a kernel change moves costs as it moves ids).
 bool BenchmarkDone(const BenchmarkBatch& batch, const BenchmarkOptions& bench, const std::string& device,
                    const std::vector<BenchmarkCost>& existing) {
-  return std::all_of(batch.jobs.begin(), batch.jobs.end(), [&](const Job& job) {
-    return std::any_of(existing.begin(), existing.end(), [&](const BenchmarkCost& c) {
+  for (std::size_t k = 0; k < batch.jobs.size(); ++k) {
+    const Job& job = batch.jobs[k];
+    const std::string kernels = BenchmarkKernels(batch, k);
+    const bool timed = std::any_of(existing.begin(), existing.end(), [&](const BenchmarkCost& c) {
       return c.scene == batch.scene && c.derivatives == batch.derivatives && c.variant == job.variant &&
              c.params == job.params && c.width == bench.width && c.height == bench.height && c.device == device &&
-             c.core == ShadingCoreVersion();
+             c.core == kernels;
     });
-  });
+    if (!timed) return false;
+  }
+  return true;
 }
 
 // Times this shard's batches (dealt by index, so each is timed once, whole)
@@ -303,6 +280,47 @@ Status RunBenchmarks(const std::vector<Job>& all_jobs, const BenchmarkOptions& b
 }
 
 }  // namespace
+
+Result<RunPlan> PlanRun(const std::vector<Job>& all_jobs, const RunOptions& options) {
+  RunPlan plan;
+  std::vector<JobResult> rows;
+  std::error_code ec;
+  if (fs::exists(options.db_path, ec)) {
+    auto store = ResultStore::Open(options.db_path, ResultStore::Mode::kReadOnly);
+    if (!store) return store.failure();
+    auto all = (*store)->All();
+    if (!all) return all.failure();
+    rows = std::move(*all);
+  }
+  std::set<std::string> ids;
+  std::map<std::string, const JobResult*> by_description;
+  for (const JobResult& r : rows) {
+    ids.insert(r.id);
+    if (r.sources.is_null() && !r.job.external) ++plan.legacy_rows;
+    const JobResult*& seen = by_description[JobDescription(r.job)];
+    if (!seen || seen->sources.is_null()) seen = &r;  // a row with sources says more
+  }
+  for (const Job& job : ShardOf(all_jobs, options.shard_index, options.shard_count)) {
+    PlannedJob planned{job, JobId(job), {}};
+    if (ids.count(planned.id)) {
+      ++plan.done;
+      continue;
+    }
+    const auto it = by_description.find(JobDescription(job));
+    auto now = SourcesOf(job);
+    if (!now) return Prefixed("job " + job.scene + " " + job.material + " " + job.camera + " " + job.variant,
+                              now.failure());
+    if (it == by_description.end())
+      planned.why = {"new job"};
+    else if (it->second->sources.is_null())
+      planned.why = {kLegacyRowReason};
+    else
+      planned.why = WhyRerun(job, JobSources::FromJson(it->second->sources), *now);
+    if (planned.why.empty()) planned.why = {"new job"};
+    plan.to_run.push_back(std::move(planned));
+  }
+  return plan;
+}
 
 RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) {
   RunSummary summary;

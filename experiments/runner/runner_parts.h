@@ -28,4 +28,9 @@ Result<metrics::MetricsReport> MeasureAgainst(const Job& job, const std::filesys
                                               const std::filesystem::path& reference,
                                               const std::filesystem::path& mask);
 
+// What a cost of batch member `k` was timed with: its kernel and the kernel
+// of the batch's `none` (the ratio's denominator). A cost of other kernels
+// is timed again; a comment edit in a shader times nothing again.
+std::string BenchmarkKernels(const BenchmarkBatch& batch, std::size_t k);
+
 }  // namespace shimmer::experiments

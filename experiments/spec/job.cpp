@@ -1,10 +1,14 @@
 #include "shimmer/experiments/job.h"
 
 #include <cstdio>
+#include <mutex>
 #include <set>
 #include <vector>
 
+#include "shimmer/metrics/metrics_version.h"
+#include "shimmer/renderer/scene.h"
 #include "shimmer/renderer/shading.h"
+#include "shimmer/renderer/user_variant.h"
 
 namespace shimmer::experiments {
 
@@ -173,62 +177,111 @@ std::vector<Job> ExpandJobs(const Spec& spec) {
                 Job job = SpecJob(spec, scene, material, camera, variant.name, params, derivatives);
                 Job key = job;
                 if (!reads) key.derivatives.clear();
-                if (seen.insert(JobId(key)).second) jobs.push_back(std::move(job));
+                if (seen.insert(JobDescription(key)).second) jobs.push_back(std::move(job));
               }
   for (const ExternalSequence& sequence : spec.sequences) jobs.push_back(ExternalJob(spec, sequence));
   return jobs;
 }
 
-std::string CoreVersionOf(std::span<const std::pair<std::string_view, std::string_view>> sources,
-                          std::string_view root) {
-  // The files the render kernel compiles: `root` and what it #includes,
-  // transitively. A file that is embedded but not yet included (a library
-  // no variant calls) renders no pixel, so it moves no job id.
-  std::set<std::string_view> reached{root};
-  std::vector<std::string_view> pending{root};
-  while (!pending.empty()) {
-    const std::string_view name = pending.back();
-    pending.pop_back();
-    for (const auto& [file, text] : sources) {
-      if (file != name) continue;
-      std::size_t at = 0;
-      constexpr std::string_view kInclude = "#include \"";
-      while ((at = text.find(kInclude, at)) != std::string_view::npos) {
-        at += kInclude.size();
-        const std::size_t end = text.find('"', at);
-        if (end == std::string_view::npos) break;
-        const std::string_view included = text.substr(at, end - at);
-        if (reached.insert(included).second) pending.push_back(included);
-      }
-    }
+Result<render::RenderSettings> RenderSettingsOf(const Job& job) {
+  using R = Result<render::RenderSettings>;
+  render::RenderSettings s;
+  auto scene = scene::LoadScene(job.scene);
+  if (!scene) return Prefixed("scene", scene.failure());
+  auto material = scene::ParseMaterial(job.material, scene->material);
+  if (!material) return material.failure();
+  const auto camera = scene::ParseCameraPath(job.camera);
+  if (!camera) return R::Failure("camera: unknown camera path '" + job.camera + "'");
+  const auto derivatives = shading::ParseDerivativeSource(job.derivatives);
+  if (!derivatives)
+    return R::Failure("derivatives: '" + job.derivatives + "' must be " + std::string(shading::kDerivativeSourceList));
+  s.scene = *scene;
+  s.material = *material;
+  s.camera = *camera;
+  s.fps = job.fps;
+  s.width = job.width;
+  s.height = job.height;
+  s.frames = job.frames;
+  s.variant = job.variant;
+  s.param_overrides.assign(job.params.begin(), job.params.end());
+  if (!job.variant_hash.empty()) {
+    // The id promised this content: a file edited since the spec was read
+    // would store other numbers under it.
+    auto user = shading::LoadUserVariant(job.variant_file);
+    if (!user) return user.failure();
+    if (user->content_hash != job.variant_hash)
+      return R::Failure(job.variant_file + ": the variant file changed since the spec was read; run again");
+    s.variant_file = job.variant_file;
   }
-  std::string all;
-  for (const auto& [name, text] : sources)
-    if (reached.count(name)) all.append(name).append(text);
-  return Fnv1a64Hex(all);
+  s.derivatives = *derivatives;
+  if (Status v = render::ValidateSettings(s); !v) return v.failure();
+  return s;
 }
 
-std::string ShadingCoreVersion() {
-  static const std::string version = CoreVersionOf(shading::GlslSources(), "core.glsl");
-  return version;
+Result<render::RenderSettings> ReferenceSettingsOf(const Job& job) {
+  auto reference = RenderSettingsOf(AsNone(job));
+  if (!reference) return reference.failure();
+  reference->reference_spp = job.reference.spp;
+  reference->reference_tolerance = job.reference.tolerance;
+  reference->reference_replicates = job.reference.replicates;
+  return reference;
 }
 
-std::string JobId(const Job& job) { return JobIdForCore(job, ShadingCoreVersion()); }
+json JobSources::ToJson() const {
+  return {{"kernel", test.kernel},
+          {"inputs", test.inputs},
+          {"reference_kernel", reference.kernel},
+          {"reference_inputs", reference.inputs},
+          {"metrics", metrics}};
+}
 
-std::string JobIdForCore(const Job& job, std::string_view core_version) {
+JobSources JobSources::FromJson(const json& j) {
+  JobSources s;
+  if (!j.is_object()) return s;
+  s.test = {j.value("kernel", std::string()), j.value("inputs", std::string())};
+  s.reference = {j.value("reference_kernel", std::string()), j.value("reference_inputs", std::string())};
+  s.metrics = j.value("metrics", std::string());
+  return s;
+}
+
+namespace {
+
+Result<JobSources> ComputeSources(const Job& job) {
+  JobSources sources;
+  sources.metrics = std::string(metrics::MetricsCodeVersion());
+  if (job.external) return sources;
+  auto test = RenderSettingsOf(job);
+  if (!test) return test.failure();
+  auto fingerprint = render::FingerprintRender(*test);
+  if (!fingerprint) return fingerprint.failure();
+  sources.test = *fingerprint;
+  auto reference = ReferenceSettingsOf(job);
+  if (!reference) return reference.failure();
+  auto reference_fingerprint = render::FingerprintRender(*reference);
+  if (!reference_fingerprint) return Prefixed("reference", reference_fingerprint.failure());
+  sources.reference = *reference_fingerprint;
+  return sources;
+}
+
+struct SourcesMemo {
+  std::mutex mutex;
+  std::map<std::string, Result<JobSources>> sources;  // by the job's JSON
+};
+SourcesMemo& Memo() {
+  static auto* memo = new SourcesMemo;  // leaked: jobs are looked up until exit
+  return *memo;
+}
+
+json DescriptionJson(const Job& job) {
   json j = job.ToJson();
   if (job.external) {
     // Where the frames lie moves no number; what they hold does.
     j["external"].erase("test");
     j["external"].erase("reference");
     j.erase("reference_spp"), j.erase("reference_tolerance"), j.erase("reference_replicates");
-    return Fnv1a64Hex(j.dump());
+    return j;
   }
-  j["core"] = core_version;
   j.erase("variant_file");  // where the file is moves no number; its content (variant_hash) does
-  // Defaults live in the C++ catalogue, not in the GLSL the core version
-  // hashes: the id holds every parameter the variant reads, resolved, so a
-  // default spelled out in a spec is the same job and a changed default is not.
   if (const shading::VariantInfo* info = shading::FindVariant(job.variant)) {
     const std::vector<std::pair<std::string, double>> overrides(job.params.begin(), job.params.end());
     // Jobs come from validated specs; one that does not resolve (it will
@@ -240,23 +293,97 @@ std::string JobIdForCore(const Job& job, std::string_view core_version) {
       j["params"] = values;
     }
   }
-  return Fnv1a64Hex(j.dump());  // nlohmann objects are key-sorted: canonical
+  return j;
 }
 
+json ReferenceDescription(const Job& job) {
+  return {{"scene", job.scene},
+          {"material", job.material},
+          {"camera", job.camera},
+          {"width", job.width},
+          {"height", job.height},
+          {"frames", job.frames},
+          {"fps", job.fps},
+          {"reference_spp", job.reference.spp},
+          {"reference_tolerance", job.reference.tolerance},
+          {"reference_replicates", job.reference.replicates}};
+}
+
+json FingerprintJson(const render::RenderFingerprint& f) { return {{"kernel", f.kernel}, {"inputs", f.inputs}}; }
+
+// nlohmann objects are key-sorted: the dump is canonical.
+std::string Hash(const json& j) { return Fnv1a64Hex(j.dump()); }
+
+}  // namespace
+
+Result<JobSources> SourcesOf(const Job& job) {
+  const std::string key = job.ToJson().dump();
+  {
+    std::lock_guard lock(Memo().mutex);
+    if (auto it = Memo().sources.find(key); it != Memo().sources.end()) return it->second;
+  }
+  auto sources = ComputeSources(job);  // unlocked: compiling a kernel takes a while
+  std::lock_guard lock(Memo().mutex);
+  return Memo().sources.emplace(key, std::move(sources)).first->second;
+}
+
+void ForgetSources() {
+  std::lock_guard lock(Memo().mutex);
+  Memo().sources.clear();
+}
+
+std::string JobDescription(const Job& job) { return DescriptionJson(job).dump(); }
+
+std::string JobIdFrom(const Job& job, const JobSources& sources) {
+  if (job.external) return Hash({{"job", DescriptionJson(job)}, {"metrics", sources.metrics}});
+  return Hash({{"job", DescriptionJson(job)},
+               {"render", FingerprintJson(sources.test)},
+               {"reference", ReferenceIdFrom(job, sources)},
+               {"metrics", sources.metrics}});
+}
+
+std::string FramesIdFrom(const Job& job, const JobSources& sources) {
+  return Hash({{"job", DescriptionJson(job)}, {"render", FingerprintJson(sources.test)}});
+}
+
+std::string ReferenceIdFrom(const Job& job, const JobSources& sources) {
+  if (job.external) return Hash({{"external_reference", job.external->reference_hash}});
+  return Hash({{"shot", ReferenceDescription(job)}, {"render", FingerprintJson(sources.reference)}});
+}
+
+namespace {
+
+// A job that does not resolve keeps an id (its description marked so): it
+// fails when run, and the runner reports why under that id.
+JobSources SourcesOrUnresolved(const Job& job) {
+  auto sources = SourcesOf(job);
+  if (sources) return *sources;
+  JobSources unresolved;
+  unresolved.test.kernel = unresolved.reference.kernel = "unresolved";
+  return unresolved;
+}
+
+}  // namespace
+
+std::string JobId(const Job& job) { return JobIdFrom(job, SourcesOrUnresolved(job)); }
+std::string FramesId(const Job& job) { return FramesIdFrom(job, SourcesOrUnresolved(job)); }
 std::string ReferenceId(const Job& job) {
-  if (job.external) return Fnv1a64Hex(json{{"external_reference", job.external->reference_hash}}.dump());
-  json j = {{"scene", job.scene},
-            {"material", job.material},
-            {"camera", job.camera},
-            {"width", job.width},
-            {"height", job.height},
-            {"frames", job.frames},
-            {"fps", job.fps},
-            {"reference_spp", job.reference.spp},
-            {"reference_tolerance", job.reference.tolerance},
-            {"reference_replicates", job.reference.replicates},
-            {"core", ShadingCoreVersion()}};
-  return Fnv1a64Hex(j.dump());
+  JobSources sources = SourcesOrUnresolved(job);
+  // A variant that does not resolve leaves its shot's reference as it is.
+  if (sources.reference.kernel == "unresolved")
+    if (auto reference = ReferenceSettingsOf(job))
+      if (auto fingerprint = render::FingerprintRender(*reference)) sources.reference = *fingerprint;
+  return ReferenceIdFrom(job, sources);
+}
+
+std::vector<std::string> WhyRerun(const Job& job, const JobSources& before, const JobSources& now) {
+  std::vector<std::string> why;
+  if (before.test.kernel != now.test.kernel) why.push_back("kernel of `" + job.variant + "` changed");
+  if (before.test.inputs != now.test.inputs) why.push_back("scene, camera or parameter content changed");
+  if (before.reference.kernel != now.reference.kernel || before.reference.inputs != now.reference.inputs)
+    why.push_back("reference changed");
+  if (before.metrics != now.metrics) why.push_back("metrics version changed");
+  return why;
 }
 
 bool ParseShard(const std::string& text, int* index, int* count) {

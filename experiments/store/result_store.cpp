@@ -38,7 +38,8 @@ CREATE TABLE IF NOT EXISTS jobs (
   gpu_ms_per_frame REAL, wall_s REAL,
   revision TEXT, core_version TEXT,
   finished_at TEXT DEFAULT (datetime('now')),
-  device TEXT, driver TEXT
+  device TEXT, driver TEXT,
+  sources TEXT
 );
 CREATE TABLE IF NOT EXISTS shots (
   reference_id TEXT PRIMARY KEY,
@@ -150,7 +151,8 @@ const char* kJobColumns[] = {"id",
                              "core_version",
                              "finished_at",
                              "device",
-                             "driver"};
+                             "driver",
+                             "sources"};
 
 std::string SqlQuote(const std::string& text) {
   std::string out = "'";
@@ -285,6 +287,7 @@ Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, 
     if (!columns.count("id") || !columns.count("job"))
       return R::Failure(path + ": not a shimmer results store (it has no jobs table)");
     store->has_device_columns_ = columns.count("device") > 0;
+    store->has_sources_column_ = columns.count("sources") > 0;
     store->has_verdict_tables_ = HasTable(db, "main", "shots") && HasTable(db, "main", "benchmarks");
     return store;
   }
@@ -294,9 +297,9 @@ Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, 
   if (Status s = store->Exec(kSchema); !s)
     return store->Failure(s.code() == ErrorCode::kIo ? "cannot write the results store"
                                                      : "not a shimmer results store");
-  // Stores from before the device columns get them; their old rows read NULL.
+  // Stores from before the device (or sources) columns get them; their old rows read NULL.
   const std::set<std::string> columns = ColumnsOf(db, "main");
-  for (const char* column : {"device", "driver"})
+  for (const char* column : {"device", "driver", "sources"})
     if (!columns.count(column))
       if (Status s = store->Exec(std::string("ALTER TABLE jobs ADD COLUMN ") + column + " TEXT;"); !s)
         return store->Failure("cannot add the " + std::string(column) + " column");
@@ -372,6 +375,10 @@ Status ResultStore::Insert(const JobResult& r) {
   text(r.core_version);
   text(r.device);
   text(r.driver);
+  if (r.sources.is_null())
+    sqlite3_bind_null(s.stmt, i++);
+  else
+    text(r.sources.dump());
   if (sqlite3_step(s.stmt) != SQLITE_DONE) {
     Error e = Failure("cannot write job " + r.id);
     (void)Exec("ROLLBACK;");
@@ -394,8 +401,9 @@ Result<std::vector<JobResult>> ResultStore::Select(const std::string& where, con
   std::vector<JobResult> rows;
   Statement s;
   const std::string device_columns = has_device_columns_ ? "device, driver" : "NULL, NULL";
+  const std::string sources_column = has_sources_column_ ? "sources" : "NULL";
   const std::string sql = "SELECT id, reference_id, metrics, gpu_ms_per_frame, wall_s, revision, core_version, job, " +
-                          device_columns + " FROM jobs " + where + " ORDER BY id";
+                          device_columns + ", " + sources_column + " FROM jobs " + where + " ORDER BY id";
   if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &s.stmt, nullptr) != SQLITE_OK) return Failure("cannot read the jobs");
   if (!id.empty()) sqlite3_bind_text(s.stmt, 1, id.c_str(), -1, SQLITE_TRANSIENT);
   auto str = [&](int c) {
@@ -411,6 +419,7 @@ Result<std::vector<JobResult>> ResultStore::Select(const std::string& where, con
       r.metrics = nlohmann::json::parse(str(2));
       // The other columns repeat the job for SQL users; the job JSON is the record.
       r.job = Job::FromJson(nlohmann::json::parse(str(7)));
+      if (const std::string sources = str(10); !sources.empty()) r.sources = nlohmann::json::parse(sources);
     } catch (const nlohmann::json::exception&) {
       return R::Failure(path_ + ": job " + r.id + " is damaged (its JSON does not parse)");
     }
@@ -547,28 +556,27 @@ Result<std::vector<BenchmarkCost>> ResultStore::Benchmarks() {
       db_, "SELECT cost_json FROM benchmarks ORDER BY scene, derivatives, variant, params, device", path_, "benchmark");
 }
 
-Result<ResultStore::Pruned> ResultStore::PruneOtherCores(const std::string& core, bool dry_run) {
+Result<ResultStore::Pruned> ResultStore::PruneStale(const std::set<std::string>& current_jobs,
+                                                   const std::set<std::string>& current_costs, bool dry_run) {
   auto rows = All();
   if (!rows) return rows.failure();
   Pruned p;
   std::vector<std::string> doomed;
-  std::set<std::string> kept_references, other_cores;
+  std::set<std::string> kept_references;
   for (const JobResult& r : *rows) {
-    if (r.job.external || r.core_version == core) {
+    if (r.job.external || current_jobs.count(r.id)) {
       ++p.kept_jobs;
       if (r.job.external) ++p.kept_external;
       kept_references.insert(r.reference_id);
     } else {
       doomed.push_back(r.id);
-      other_cores.insert(r.core_version);
     }
   }
   if (p.kept_jobs == p.kept_external && !doomed.empty())
-    return Result<Pruned>::Failure(path_ + ": no job of the current shading core " + core +
-                                   " is in the store; pruning would leave only external rows (nothing removed; run "
-                                   "the spec with this shimmer first)");
+    return Result<Pruned>::Failure(path_ +
+                                   ": no job of this store is one this shimmer would run; pruning would leave only "
+                                   "external rows (nothing removed; run the spec with this shimmer first)");
   p.jobs = doomed.size();
-  p.cores = other_cores.size();
   std::vector<std::string> orphan_shots;
   std::vector<BenchmarkCost> stale_costs;
   if (has_verdict_tables_) {
@@ -579,7 +587,7 @@ Result<ResultStore::Pruned> ResultStore::PruneOtherCores(const std::string& core
     auto costs = Benchmarks();
     if (!costs) return costs.failure();
     for (const BenchmarkCost& c : *costs)
-      if (c.core != core) stale_costs.push_back(c);
+      if (!current_costs.count(c.core)) stale_costs.push_back(c);
   }
   p.shots = orphan_shots.size();
   p.benchmarks = stale_costs.size();

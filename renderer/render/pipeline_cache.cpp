@@ -13,6 +13,7 @@
 #include <tuple>
 
 #include "kernel_disk_cache.h"
+#include "test_hooks.h"
 #include "shimmer/core/content_hash.h"
 
 namespace shimmer::render {
@@ -30,15 +31,22 @@ constexpr std::string_view kUserVariantFile = "user_variant.glsl";
 constexpr std::string_view kUserParamsFile = "user_params.glsl";  // UserParamsGlsl
 
 // The kernel and the files it includes besides the shading core.
+// Files of `overrides` (test hooks) come first: the includer takes the
+// first file of a name.
 std::vector<shading::GlslFile> KernelFiles(std::string_view kernel, bool user_variant, bool sg_light,
+                                           std::span<const std::pair<std::string, std::string>> overrides,
                                            shading::GlslFile* main) {
   std::vector<shading::GlslFile> extra;
+  for (const auto& [name, body] : overrides)
+    if (name != kernel) extra.push_back({name, body});
   for (const auto& [name, body] : embedded::Sources()) {
     if (name == kernel)
       *main = {std::string(name), std::string(body)};
     else
       extra.push_back({std::string(name), std::string(body)});
   }
+  for (const auto& [name, body] : overrides)
+    if (name == kernel) main->text = body;
   // After #version (line 1): keep the kernel's own line numbers after the defines.
   std::string defines;
   if (user_variant) defines += "#define SHIMMER_USER_VARIANT\n";
@@ -143,7 +151,37 @@ Result<shading::Spirv> CachedSpirv(const std::optional<std::filesystem::path>& f
   return made;
 }
 
+// What names a specialized module in the cache: the kernel's sources, the
+// constants and the optimizer.
+std::string SpecializedKey(const KernelModule& kernel, std::span<const std::int32_t> specialization) {
+  std::string constants;
+  for (std::int32_t c : specialization) constants += std::to_string(c) + ",";
+  return Fnv1a64Hex(kernel.key + '\0' + constants + '\0' + shading::SpecializerVersion());
+}
+
+Result<shading::Spirv> SpecializedModule(const KernelModule& kernel, std::span<const std::int32_t> specialization) {
+  return CachedSpirv(CacheFolder("specialized"), SpecializedKey(kernel, specialization) + ".spv",
+                     [&] { return shading::SpecializeCompute(kernel.spirv, specialization); });
+}
+
 }  // namespace
+
+Result<std::string> SpecializedKernelHash(const KernelModule& kernel, std::span<const std::int32_t> specialization) {
+  static std::mutex mutex;
+  static auto* hashes = new std::map<std::string, std::string>;  // leaked, like the caches
+  const std::string key = SpecializedKey(kernel, specialization);
+  {
+    std::lock_guard lock(mutex);
+    if (auto it = hashes->find(key); it != hashes->end()) return it->second;
+  }
+  auto specialized = SpecializedModule(kernel, specialization);
+  if (!specialized) return specialized.failure();
+  auto hash = shading::CanonicalSpirvHash(*specialized);
+  if (!hash) return hash.failure();
+  std::lock_guard lock(mutex);
+  hashes->emplace(key, *hash);
+  return *hash;
+}
 
 struct PipelineSlot {
   std::once_flag compiled;
@@ -178,13 +216,15 @@ DeviceCache& Devices() {
 Result<std::shared_ptr<const KernelModule>> KernelSpirv(std::string_view kernel, const shading::UserVariant* user,
                                                         bool sg_light, double* compile_ms) {
   const std::string prelude = user ? shading::UserParamsGlsl(*user) : std::string();
-  const std::string key = std::string(kernel) + (sg_light ? ":sg:" : ":delta:") +
-                          (user ? "user:" + prelude + "\n" + user->text : std::string());
+  const auto overrides = testing::CurrentTestHooks().source_overrides;
+  std::string key = std::string(kernel) + (sg_light ? ":sg:" : ":delta:") +
+                    (user ? "user:" + prelude + "\n" + user->text : std::string());
+  for (const auto& [name, body] : overrides) key += '\0' + name + '\0' + body;
   const auto t0 = Clock::now();
   std::lock_guard lock(Modules().mutex);
   if (auto it = Modules().modules.find(key); it != Modules().modules.end()) return it->second;
   shading::GlslFile main;
-  std::vector<shading::GlslFile> extra = KernelFiles(kernel, user != nullptr, sg_light, &main);
+  std::vector<shading::GlslFile> extra = KernelFiles(kernel, user != nullptr, sg_light, overrides, &main);
   if (user) {
     extra.push_back({std::string(kUserParamsFile), prelude});
     extra.push_back({std::string(kUserVariantFile), user->text});
@@ -277,12 +317,9 @@ Result<std::shared_ptr<vk::ComputePipeline>> AcquirePipeline(const DeviceHandle&
         slot->error = pipeline.failure();
       return;
     }
-    std::string constants;
-    for (std::int32_t c : specialization) constants += std::to_string(c) + ",";
-    const std::string key = Fnv1a64Hex(kernel->key + '\0' + constants + '\0' + shading::SpecializerVersion());
+    const std::string key = SpecializedKey(*kernel, specialization);
     const auto t0 = Clock::now();
-    auto specialized = CachedSpirv(CacheFolder("specialized"), key + ".spv",
-                                   [&] { return shading::SpecializeCompute(kernel->spirv, specialization); });
+    auto specialized = SpecializedModule(*kernel, specialization);
     if (times) times->specialize_ms = MsSince(t0);
     if (!specialized) {
       slot->error = specialized.failure();

@@ -32,6 +32,11 @@ struct KernelModule {
 Result<std::shared_ptr<const KernelModule>> KernelSpirv(std::string_view kernel, const shading::UserVariant* user,
                                                         bool sg_light, double* compile_ms);
 
+// shading::CanonicalSpirvHash of `kernel` specialized to `specialization`
+// (the module AcquirePipeline hands the driver), kept per process; the
+// specialized module comes from the disk cache when it is there.
+Result<std::string> SpecializedKernelHash(const KernelModule& kernel, std::span<const std::int32_t> specialization);
+
 // A device shared by every renderer asking for the same options, created on
 // first use and never destroyed: tearing Vulkan down from static destructors
 // would race the driver's own teardown, and the OS reclaims everything at

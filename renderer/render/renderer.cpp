@@ -1,7 +1,6 @@
 #include "shimmer/renderer/renderer.h"
 
 #include <algorithm>
-#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +11,7 @@
 #include <sstream>
 
 #include "gpu_layout.h"
+#include "kernel_inputs.h"
 #include "pipeline_cache.h"
 #include "test_hooks.h"
 #include "variant_resolution.h"
@@ -23,18 +23,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double MsSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
-
-gpu::Camera ToGpu(const shading::CameraDesc& c) {
-  auto f = [](float* out, glm::dvec3 v, double w) {
-    out[0] = float(v.x), out[1] = float(v.y), out[2] = float(v.z), out[3] = float(w);
-  };
-  gpu::Camera g;
-  f(g.pos_tan, c.pos, c.tan_half_fov_y);
-  f(g.fwd_aspect, c.fwd, double(c.width) / double(c.height));
-  f(g.right, c.right, 0);
-  f(g.up, c.up, 0);
-  return g;
-}
 
 testing::TestHooks& Hooks() {
   static testing::TestHooks hooks;
@@ -222,12 +210,7 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
     return R::Failure("device '" + dev.name +
                       "' has no subgroup quad operations in compute shaders; use analytic derivatives");
 
-  const std::int32_t spec[] = {im.variant.id,
-                               static_cast<std::int32_t>(settings.derivatives),
-                               im.variant.spp_n,
-                               scene::SceneFeatures(settings.scene),
-                               static_cast<std::int32_t>(settings.material.ndf),
-                               im.variant.reference ? 1 : 0};
+  const auto spec = KernelSpecialization(im.variant, settings);
   using vk::BufferKind;
   const BufferKind kinds[] = {BufferKind::kUniform, BufferKind::kStorage, BufferKind::kStorage, BufferKind::kStorage};
   PipelineTimes pipeline_times;
@@ -277,34 +260,9 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
 Result<Frame> Renderer::RenderFrame(int index) {
   Impl& im = *impl_;
   const RenderSettings& s = im.settings;
-  gpu::FrameConstants f{};
-  f.cam = ToGpu(camera(index));
-  f.prev = ToGpu(camera(index - 1));
-  const shading::LightDesc& l = s.scene.light;
-  auto put = [](float* out, glm::dvec3 v, double w) {
-    out[0] = float(v.x), out[1] = float(v.y), out[2] = float(v.z), out[3] = float(w);
-  };
-  put(f.light_a, l.vec, double(static_cast<int>(l.type)));
-  put(f.light_b, l.radiance, l.radius);
-  // The NDF is specialization constant 4; a glint material's local lobe and density ride along.
-  put(f.mat_a, {s.material.alpha.x, s.material.alpha.y, s.material.glint_alpha_l}, s.material.glint_density);
-  put(f.mat_f0, s.material.f0, 0);
-  put(f.mat_albedo, s.material.albedo, 0);
-  f.size[0] = s.width;
-  f.size[1] = s.height;
-
-  gpu::Push push{};
-  const auto& p = im.variant.params;
-  push.params[0] = float(p.fp_max), push.params[1] = float(p.fp_min_cap);
-  push.params[2] = float(p.sigma2), push.params[3] = float(p.kappa);
-  push.params2[0] = float(p.nm_scale), push.params2[1] = float(p.curvature_scale);
-  push.params2[2] = float(p.curvature_bias), push.params2[3] = float(p.curvature_exponent);
-  push.round[1] = index;
-  push.round[2] = s.reference_replicates;
-  push.round[3] = std::bit_cast<std::int32_t>(s.seed);
+  gpu::FrameConstants f = FrameConstantsOf(s, index);
+  gpu::Push push = PushOf(im.variant, s, index);
   const bool adaptive = im.variant.reference && s.reference_tolerance > 0;
-  push.target[0] = adaptive ? float(s.reference_tolerance) : 0.0f;
-  push.target[1] = float(kReferenceLuminanceFloor);
   // A reference renders K replicates (rounds), an adaptive one then more
   // until every pixel is within the tolerance or max_rounds is reached. (N = 1
   // shades the pixel centre: there is nothing to replicate.)

@@ -2,6 +2,10 @@
 // They apply to renderers created while a ScopedTestHooks lives.
 #pragma once
 
+#include <string>
+#include <utility>
+#include <vector>
+
 namespace shimmer::render::testing {
 
 struct TestHooks {
@@ -14,6 +18,9 @@ struct TestHooks {
   // Hand the driver the whole kernel with specialization constants, as
   // before shimmer specialized it itself: the test that both render alike.
   bool driver_specializes = false;
+  // Kernel or shading-core GLSL files (by name, e.g. "ggx_rect.glsl") with
+  // other text: how the job-id tests edit a shader without rebuilding.
+  std::vector<std::pair<std::string, std::string>> source_overrides;
 };
 
 class ScopedTestHooks {

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <filesystem>
 #include <map>
 #include <mutex>
 #include <span>
@@ -423,12 +424,22 @@ Result<std::shared_ptr<const NormalMap>> LoadNormalMap(const NormalMapSource& so
       return R::Failure("unknown procedural normal map '" + source.procedural + "' (known: " + KnownNames() + ")");
   }
 
-  // Keyed by the path as given: the caller resolves it, and a file is read
-  // once per process even if it changes on disk afterwards.
-  using Key = std::tuple<std::string, std::string, double>;
+  // Keyed by the path as given (the caller resolves it) with the file's size
+  // and modification time: a file is read once per process unless it is
+  // rewritten meanwhile, and then its new texels are what a job id hashes.
+  using Key = std::tuple<std::string, std::string, double, std::uintmax_t, std::int64_t>;
   static std::mutex mutex;
   static std::map<Key, std::shared_ptr<const NormalMap>> cache;
-  const Key key{source.file, source.procedural, source.strength};
+  std::uintmax_t size = 0;
+  std::int64_t modified = 0;
+  if (from_file) {
+    std::error_code ec;
+    size = std::filesystem::file_size(source.file, ec);
+    if (ec) size = 0;
+    const auto time = std::filesystem::last_write_time(source.file, ec);
+    if (!ec) modified = std::int64_t(time.time_since_epoch().count());
+  }
+  const Key key{source.file, source.procedural, source.strength, size, modified};
   {
     std::lock_guard lock(mutex);
     if (auto found = cache.find(key); found != cache.end()) return found->second;

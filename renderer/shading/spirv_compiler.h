@@ -40,4 +40,15 @@ Result<Spirv> SpecializeCompute(const Spirv& module, std::span<const std::int32_
 // The optimizer's version, for cache keys of specialized modules.
 std::string SpecializerVersion();
 
+// A hash of what `module` computes, not of how its source was written
+// (spirv_canonical.cpp): debug and non-semantic instructions stripped, then
+// every id hashed by its content (a type or constant by its definition, a
+// function by its body, a local value by its place in its function), from
+// the entry point down. A comment, a renamed local, dead code, or another
+// order of the shared declarations (glslang declares a constant where it
+// first meets it, so an edit of one variant reorders every kernel's) leave it
+// as it was; an edit of code the module runs moves it. Job ids are built on
+// it (experiments/spec/job.h).
+Result<std::string> CanonicalSpirvHash(const Spirv& module);
+
 }  // namespace shimmer::shading

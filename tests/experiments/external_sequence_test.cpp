@@ -88,8 +88,13 @@ TEST(ExternalSequenceSpec, IdsHashTheFramesNotWhereTheyLie) {
                                               "reference": "../moved/ref"}])"))[0];
   EXPECT_NE(JobId(edited), JobId(first));
   EXPECT_EQ(ReferenceId(edited), ReferenceId(first));
-  // The shading core renders none of their pixels: it moves no id.
-  EXPECT_EQ(JobIdForCore(first, "a"), JobIdForCore(first, "b"));
+  // No kernel renders their pixels: a kernel moves no id; the metrics code does.
+  JobSources a, b;
+  a.metrics = b.metrics = "m";
+  a.test.kernel = "a", b.test.kernel = "b";
+  EXPECT_EQ(JobIdFrom(first, a), JobIdFrom(first, b));
+  b.metrics = "m2";
+  EXPECT_NE(JobIdFrom(first, a), JobIdFrom(first, b));
 }
 
 TEST(ExternalSequenceSpec, EveryBadEntryIsOneErrorNamingTheEntryAndKey) {

@@ -23,12 +23,16 @@ inline JobResult MakeResult(const std::string& variant, double fp_max, double tv
   r.job.frames = 8;
   r.job.fps = 30;
   r.job.reference = {4, 0};
+  // Rows of variants given parameters they lack (`none` with fp_max) do not
+  // resolve: they keep the ids of their description.
+  const auto sources = SourcesOf(r.job);
   r.id = JobId(r.job);
   r.reference_id = ReferenceId(r.job);
+  if (sources) r.sources = sources->ToJson();
   r.metrics = {{"tv_ratio", tv_ratio}, {"tv_err", 0.5}, {"flicker", {{"flicker_index", 0.25}}}};
   r.gpu_ms_per_frame = 1.5;
   r.revision = "abc";
-  r.core_version = ShadingCoreVersion();
+  r.core_version = sources ? sources->test.kernel : std::string("unresolved");
   return r;
 }
 

@@ -75,29 +75,31 @@ const VariantSummary& Find(const std::vector<VariantSummary>& all, const std::st
   throw std::runtime_error("no summary of " + label);
 }
 
-// A store run with two shading cores: the report keeps the current core's
+// A store run with two versions of the code: the report keeps the current
 // rows and the external ones, and says how many it left out.
-TEST(ReportRows, RowsOfAnOlderCoreAreLeftOutWithANote) {
+TEST(ReportRows, RowsOfOlderCodeAreLeftOutWithANote) {
   std::vector<JobResult> rows;
-  for (const char* core : {"old", "new", "new"}) {
+  for (const char* id : {"old", "new-1", "new-2"}) {
     rows.push_back(MakeResult("tk19", 1, 2));
-    rows.back().core_version = core;
+    rows.back().id = id;
   }
   rows.push_back(MakeResult("none", 1, 2));
-  rows.back().core_version = "old";
+  rows.back().id = "ext";
   rows.back().job.external = ExternalFrames{};
   std::string note;
-  const auto kept = RowsOfCore(rows, "new", &note);
+  const auto kept = CurrentRows(rows, {"new-1", "new-2"}, &note);
   ASSERT_EQ(kept.size(), 3u);
-  EXPECT_EQ(kept[0].core_version, "new");
+  EXPECT_EQ(kept[0].id, "new-1");
   EXPECT_TRUE(kept[2].job.external.has_value());
-  EXPECT_NE(note.find("2 shading-core versions"), std::string::npos) << note;
-  EXPECT_NE(note.find("leaves out 1 older"), std::string::npos) << note;
-  // One core, or none of them this shimmer's: nothing is left out.
+  EXPECT_NE(note.find("holds 1 rows made by other code"), std::string::npos) << note;
+  // None of them current: all are shown, and the note says so.
   note.clear();
-  EXPECT_EQ(RowsOfCore(rows, "other", &note).size(), 4u);
+  EXPECT_EQ(CurrentRows(rows, {"other"}, &note).size(), 4u);
+  EXPECT_NE(note.find("no row of the store"), std::string::npos) << note;
+  // All current: nothing left out, no note.
+  note.clear();
+  EXPECT_EQ(CurrentRows({rows[1], rows[2]}, {"new-1", "new-2"}, &note).size(), 2u);
   EXPECT_TRUE(note.empty());
-  EXPECT_EQ(RowsOfCore({rows[1], rows[2]}, "new", &note).size(), 2u);
 }
 
 TEST(ReportStatistics, QuartilesInterpolateBetweenOrderStatistics) {

@@ -285,7 +285,7 @@ TEST(ResultStore, PruneRemovesOlderCoresRowsChecksAndCosts) {
   timed_now.variant = "tk19", timed_before.variant = "none";
   timed_now.width = timed_now.height = timed_before.width = timed_before.height = 512;
   timed_now.device = timed_before.device = "dev";
-  timed_now.core = ShadingCoreVersion(), timed_before.core = "aaaa";
+  timed_now.core = "kernels-now", timed_before.core = "aaaa";
   {
     auto store = ResultStore::Open(path);
     ASSERT_TRUE(store) << store.error();
@@ -296,21 +296,21 @@ TEST(ResultStore, PruneRemovesOlderCoresRowsChecksAndCosts) {
   }
   auto store = ResultStore::Open(path);
   ASSERT_TRUE(store);
-  const auto dry = (*store)->PruneOtherCores(ShadingCoreVersion(), /*dry_run=*/true);
+  const std::set<std::string> current_jobs{current.id}, current_costs{"kernels-now"};
+  const auto dry = (*store)->PruneStale(current_jobs, current_costs, /*dry_run=*/true);
   ASSERT_TRUE(dry) << dry.error();
   EXPECT_EQ(dry->jobs, 2u);
-  EXPECT_EQ(dry->cores, 2u);
   EXPECT_EQ(dry->shots, 1u);
   EXPECT_EQ(dry->benchmarks, 1u);
   EXPECT_EQ(dry->kept_jobs, 2u);
   EXPECT_EQ(dry->kept_external, 1u);
   EXPECT_EQ((*store)->All()->size(), 4u);  // the dry run changed nothing
-  // Refused with a core the store has no job of: nothing removed.
-  const auto refused = (*store)->PruneOtherCores("cccc", false);
+  // Refused when no job of the store is current: nothing removed.
+  const auto refused = (*store)->PruneStale({"cccc"}, current_costs, false);
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().find("nothing removed"), std::string::npos) << refused.error();
   EXPECT_EQ((*store)->All()->size(), 4u);
-  const auto pruned = (*store)->PruneOtherCores(ShadingCoreVersion(), false);
+  const auto pruned = (*store)->PruneStale(current_jobs, current_costs, false);
   ASSERT_TRUE(pruned) << pruned.error();
   EXPECT_EQ(pruned->jobs, 2u);
   std::set<std::string> ids;
@@ -325,7 +325,7 @@ TEST(ResultStore, PruneRemovesOlderCoresRowsChecksAndCosts) {
   ASSERT_EQ(costs->size(), 1u);
   EXPECT_EQ(costs->front().variant, "tk19");
   // Again: nothing left to remove.
-  const auto again = (*store)->PruneOtherCores(ShadingCoreVersion(), false);
+  const auto again = (*store)->PruneStale(current_jobs, current_costs, false);
   ASSERT_TRUE(again);
   EXPECT_EQ(again->jobs + again->shots + again->benchmarks, 0u);
 }

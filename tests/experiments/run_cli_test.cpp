@@ -192,8 +192,8 @@ TEST(RunCli, ShotsAreCheckedAndVariantsBenchmarkedOnce) {
   const std::string rerun = ReadText(ws.dir / "log.txt").substr(before);
   EXPECT_EQ(rerun.find("checked"), std::string::npos) << rerun;
   EXPECT_EQ(rerun.find("benchmark"), std::string::npos) << rerun;
-  // A batch timed by another shading core is timed again, and only that one.
-  for (const BenchmarkCost& c : *costs) EXPECT_EQ(c.core, ShadingCoreVersion());
+  // A batch timed with other kernels is timed again, and only that one.
+  for (const BenchmarkCost& c : *costs) EXPECT_EQ(c.core.size(), 16u) << c.variant;
   {
     auto writable = ResultStore::Open((ws.dir / "r.db").string());
     ASSERT_TRUE(writable) << writable.error();

@@ -55,30 +55,10 @@ TEST(Spec, ParsesAndExpandsTheCrossProduct) {
 }
 
 // Ids name stored results across runs, machines and versions of shimmer: the
-// id of a fixed job is pinned here, so that a change to the canonical JSON,
-// the parameter resolution or the hash shows up as this failure (and then
-// means: every store's rows are recomputed). The shading core's own version is
-// fixed too, since every GLSL edit changes it by design.
-TEST(Spec, CoreVersionHashesWhatTheRootIncludesAndNothingElse) {
-  using Sources = std::vector<std::pair<std::string_view, std::string_view>>;
-  const Sources core{
-      {"core.glsl", "#include \"a.glsl\"\n"}, {"a.glsl", "#include \"b.glsl\"\nfloat a;\n"}, {"b.glsl", "float b;\n"}};
-  // Every file reached, in the sources' order: the hash of all of them.
-  EXPECT_EQ(CoreVersionOf(core, "core.glsl"),
-            Fnv1a64Hex("core.glsl#include \"a.glsl\"\na.glsl#include \"b.glsl\"\nfloat a;\nb.glslfloat b;\n"));
-  // A library no kernel includes yet moves no id; once included, it does.
-  Sources with_library = core;
-  with_library.push_back({"sg.glsl", "float sg;\n"});
-  EXPECT_EQ(CoreVersionOf(with_library, "core.glsl"), CoreVersionOf(core, "core.glsl"));
-  Sources included = with_library;
-  included[2] = {"b.glsl", "#include \"sg.glsl\"\nfloat b;\n"};
-  EXPECT_NE(CoreVersionOf(included, "core.glsl"), CoreVersionOf(core, "core.glsl"));
-  // A change in a transitively included file moves it.
-  Sources edited = core;
-  edited[2] = {"b.glsl", "float b2;\n"};
-  EXPECT_NE(CoreVersionOf(edited, "core.glsl"), CoreVersionOf(core, "core.glsl"));
-}
-
+// id of a fixed job with fixed sources is pinned here, so that a change to
+// the canonical JSON, the parameter resolution or the hash shows up as this
+// failure (and then means: every store's rows are recomputed). The sources
+// themselves are pinned by what the kernel and content tests change.
 TEST(Spec, IdsAreStable) {
   // FNV-1a 64, the published test vectors.
   EXPECT_EQ(Fnv1a64Hex(""), "cbf29ce484222325");
@@ -95,15 +75,38 @@ TEST(Spec, IdsAreStable) {
   j.frames = 32;
   j.fps = 30;
   j.reference = {8, 0};
-  EXPECT_EQ(JobIdForCore(j, "test-core"), "f68bcc2395e8ae9a");
+  JobSources sources;
+  sources.test = {"kernel-a", "inputs-a"};
+  sources.reference = {"kernel-r", "inputs-r"};
+  sources.metrics = "metrics-1";
+  EXPECT_EQ(JobIdFrom(j, sources), "b142036ef03cd997");
   // A default spelled out is the same job; another value is not.
   Job spelled = j;
   spelled.params = {};
   Job defaulted = spelled;
   defaulted.params = {{"fp_max", 1.0}};
-  EXPECT_EQ(JobIdForCore(spelled, "test-core"), JobIdForCore(defaulted, "test-core"));
-  EXPECT_NE(JobIdForCore(spelled, "test-core"), JobIdForCore(j, "test-core"));
-  EXPECT_NE(JobIdForCore(j, "other-core"), JobIdForCore(j, "test-core"));
+  EXPECT_EQ(JobIdFrom(spelled, sources), JobIdFrom(defaulted, sources));
+  EXPECT_NE(JobIdFrom(spelled, sources), JobIdFrom(j, sources));
+  // Each source moves the row; the frames move with the test render only;
+  // the reference with its own render only.
+  for (auto edit : {+[](JobSources& s) { s.test.kernel = "kernel-b"; }, +[](JobSources& s) { s.test.inputs = "b"; },
+                    +[](JobSources& s) { s.reference.kernel = "b"; }, +[](JobSources& s) { s.metrics = "metrics-2"; }}) {
+    JobSources other = sources;
+    edit(other);
+    EXPECT_NE(JobIdFrom(j, other), JobIdFrom(j, sources));
+    const bool test_moved = other.test.kernel != sources.test.kernel || other.test.inputs != sources.test.inputs;
+    EXPECT_EQ(FramesIdFrom(j, other) != FramesIdFrom(j, sources), test_moved);
+    EXPECT_EQ(ReferenceIdFrom(j, other) != ReferenceIdFrom(j, sources), other.reference.kernel != "kernel-r");
+  }
+  // What WhyRerun says for each.
+  JobSources other = sources;
+  other.test.kernel = "kernel-b", other.metrics = "metrics-2";
+  EXPECT_EQ(WhyRerun(j, sources, other),
+            (std::vector<std::string>{"kernel of `k16-beckmann-rect` changed", "metrics version changed"}));
+  EXPECT_TRUE(WhyRerun(j, sources, sources).empty());
+  // Through JSON, as the store keeps them.
+  const JobSources back = JobSources::FromJson(sources.ToJson());
+  EXPECT_EQ(JobIdFrom(j, back), JobIdFrom(j, sources));
 }
 
 TEST(Spec, ReferencesAreShared) {

@@ -1,6 +1,7 @@
 // Jobs: one (scene, material, camera, variant with parameter values,
-// derivative source) of a spec, with an id that hashes every resolved
-// parameter and the shading core, so reruns skip finished work.
+// derivative source) of a spec, with an id that hashes what the job runs
+// (its kernel and the content it reads), so reruns skip finished work and
+// redo exactly the work a change touches.
 #pragma once
 
 #include <cstdint>
@@ -16,6 +17,7 @@
 
 #include "shimmer/core/content_hash.h"
 #include "shimmer/experiments/spec.h"
+#include "shimmer/renderer/renderer.h"
 
 namespace shimmer::experiments {
 
@@ -24,7 +26,7 @@ struct Job {
   std::string material;
   std::string camera;
   std::string variant;
-  std::map<std::string, double> params;  // only the values the spec sweeps; defaults are implied by the core version
+  std::map<std::string, double> params;  // only the values the spec sweeps; ids resolve the defaults
   std::string derivatives;
   // A user variant: its file (not part of the id: the content is) and the
   // hash of its content. Its params hold every declared parameter.
@@ -64,30 +66,63 @@ bool ReadsDerivatives(const std::string& variant);
 // camera, variant, parameter values, derivatives), then the spec's external
 // sequences in spec order. A variant that does not
 // read derivatives gets one job per shot, with its group's first source. A
-// job (by JobId) that is there already is left out: the first one stays.
+// job (by JobDescription) that is there already is left out: the first one stays.
 std::vector<Job> ExpandJobs(const Spec& spec);
 
-// 16 hex digits: FNV-1a 64 of the canonical JSON of the job, every parameter
-// value the variant reads (defaults included) and the shading core's version
-// (external sequences: their frames' content, not the core, which renders
-// none of their pixels). Stable across runs and machines.
-std::string JobId(const Job& job);
-// The same for a given shading-core version: ids can be pinned by tests
-// without every GLSL edit changing the expected value.
-std::string JobIdForCore(const Job& job, std::string_view core_version);
+// The render settings of a job (scene loaded, material, camera and
+// derivative source parsed, the user variant file checked against the hash
+// the spec read), with no device and EXR frames compressed; the error names
+// what does not resolve. The runner adds its device and compression.
+Result<render::RenderSettings> RenderSettingsOf(const Job& job);
+// Those of its reference: `none` with the job's reference spp, tolerance and
+// replicates.
+Result<render::RenderSettings> ReferenceSettingsOf(const Job& job);
 
-// The reference a job is measured against: shared by every variant and
-// derivative source of the same scene, material, camera, size and motion; an
-// external sequence's is the content of its reference frames.
+// What a job's frames and numbers are made of (docs/experiments.md, Job
+// ids): the fingerprints of its render and of its reference's render
+// (render::FingerprintRender: the specialized kernel module and the bytes it
+// reads) and the version of the metrics code.
+struct JobSources {
+  render::RenderFingerprint test, reference;
+  std::string metrics;
+  nlohmann::json ToJson() const;
+  static JobSources FromJson(const nlohmann::json& j);  // empty fields where `j` lacks them
+};
+// The sources of `job` as this shimmer would run it, kept per process. An
+// external sequence has none (its frames' content hashes are in the job).
+Result<JobSources> SourcesOf(const Job& job);
+// Forgets the kept sources: for a process that edits shaders (test hooks),
+// scene files or normal maps in place and asks again.
+void ForgetSources();
+
+// The canonical JSON of the job as it describes itself: its fields with
+// every parameter the variant reads resolved (defaults included, so that a
+// default spelled out in a spec is the same job), without the file path of a
+// user variant. Two jobs with one description are one job of a spec.
+std::string JobDescription(const Job& job);
+
+// 16 hex digits, stable across runs and machines. A row's id hashes the
+// description, the test render's fingerprint, the reference id and the
+// metrics version; FramesIdFrom, the frames alone (description and test
+// fingerprint); ReferenceIdFrom, the reference's description (shot, size,
+// motion, reference options) and its fingerprint. So a comment edit in a
+// shader moves nothing, an edit of one variant moves that variant's ids, and
+// a change of the metrics code moves rows but not frames. An external
+// sequence's ids hash its frames' content.
+std::string JobIdFrom(const Job& job, const JobSources& sources);
+std::string FramesIdFrom(const Job& job, const JobSources& sources);
+std::string ReferenceIdFrom(const Job& job, const JobSources& sources);
+
+// The same with SourcesOf(job). A job that does not resolve (it fails when
+// run, with the reason) gets an id of its description alone.
+std::string JobId(const Job& job);
+std::string FramesId(const Job& job);
 std::string ReferenceId(const Job& job);
 
-// Hash of the GLSL shading core text: changes whenever the filter math does.
-std::string ShadingCoreVersion();
-// The hash of `root` and every source it includes, transitively, in the
-// order of `sources` (name then text of each); sources outside that closure
-// do not count.
-std::string CoreVersionOf(std::span<const std::pair<std::string_view, std::string_view>> sources,
-                          std::string_view root);
+// Why the job with sources `now` is not the stored job with sources
+// `before` (the same description): "kernel of `tk19` changed", "scene or
+// camera content changed", "reference changed", "metrics version changed".
+std::vector<std::string> WhyRerun(const Job& job, const JobSources& before, const JobSources& now);
 
 // Jobs with index % n == i (i in [0, n)). Parses "i/n"; returns false on bad input.
 bool ParseShard(const std::string& text, int* index, int* count);

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -23,13 +24,15 @@ namespace shimmer::experiments {
 // A NaN cost (an untimed row) is neither on the front nor dominates.
 std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<double>& error);
 
-// A store keeps the rows of every shading core it was run with (a changed
-// core moves every job id), and a report of old and new rows side by side
-// would show each variant twice. When the rows hold several core versions
-// and `current` is one of them, only its rows (and those of external
-// sequences, which no core renders) are kept and `note` says how many were
-// left out; otherwise the rows are returned as they are.
-std::vector<JobResult> RowsOfCore(std::vector<JobResult> rows, const std::string& current, std::string* note);
+// A store keeps the rows of every version of the code it was run with (a
+// changed kernel moves the ids of its jobs), and a report of old and new
+// rows side by side would show a variant twice. When some rows' ids are in
+// `current` (FindCurrentRows) and others not, only the current ones (and
+// those of external sequences, which no kernel renders) are kept and `note`
+// says how many were left out; when none is current, the rows are returned
+// as they are and `note` says so.
+std::vector<JobResult> CurrentRows(std::vector<JobResult> rows, const std::set<std::string>& current,
+                                   std::string* note);
 
 // Writes the report for `rows` into `out_dir` (created): every file or none
 // (StagedDirectory), report.md last. Plots need gnuplot; without it the

@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <utility>
 #include <string>
 #include <vector>
@@ -56,8 +57,8 @@ struct BenchmarkCost {
   double none_median_ms = 0;                     // `none` in the same batch
   double ratio_to_none = 0;                      // median_ms / none_median_ms
   std::string device, driver;
-  // The shading core that rendered the batch: a changed core is timed again.
-  // Empty for rows from before it was recorded.
+  // The kernels it was timed with (BenchmarkKernels): a cost of other
+  // kernels is timed again. Older rows: the shading core's text hash.
   std::string core;
 };
 
@@ -88,7 +89,10 @@ struct JobResult {
   double gpu_ms_per_frame = 0;
   double wall_s = 0;
   std::string revision;
-  std::string core_version;
+  std::string core_version;  // the kernel that rendered it (JobSources::test.kernel); older rows: the core's text hash
+  // JobSources::ToJson of the code that made the row; null for rows from
+  // before per-kernel ids (they are re-run once, see `shimmer run`).
+  nlohmann::json sources;
   std::string device;  // the Vulkan device that rendered it, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
   std::string driver;  // its driver and version, so that merged shards stay distinguishable
   // Joined when read from a store: the shot's convergence check (by
@@ -143,19 +147,20 @@ class ResultStore {
                    const nlohmann::json& result);
   Result<std::vector<nlohmann::json>> Fits();
 
-  // A store keeps the rows of every shading core it ran with (a changed core
-  // moves every job id). PruneOtherCores removes the job rows of cores other
-  // than `core` (external sequences, which no core renders, are kept), the
-  // convergence checks no remaining row refers to, and the benchmark costs
-  // another core timed; then compacts the file. One transaction: all or
-  // nothing. Refused, with nothing removed, when no job row of `core` is in
-  // the store (pruning would empty it). `dry_run` counts without removing.
+  // A store keeps the rows of every version of the code it ran with (a
+  // changed kernel moves the ids of its jobs). PruneStale removes the job rows
+  // whose id is not in `current_jobs` (external sequences, which no kernel
+  // renders, are kept), the convergence checks no remaining row refers to,
+  // and the benchmark costs whose kernels (BenchmarkCost::core) are not in
+  // `current_costs`; then compacts the file. One transaction: all or
+  // nothing. Refused, with nothing removed, when no job row is current
+  // (pruning would empty it). `dry_run` counts without removing.
   struct Pruned {
     std::size_t jobs = 0, shots = 0, benchmarks = 0;  // removed (or, in a dry run, to remove)
     std::size_t kept_jobs = 0, kept_external = 0;
-    std::size_t cores = 0;  // distinct other cores among the removed jobs
   };
-  Result<Pruned> PruneOtherCores(const std::string& core, bool dry_run);
+  Result<Pruned> PruneStale(const std::set<std::string>& current_jobs, const std::set<std::string>& current_costs,
+                            bool dry_run);
 
  private:
   explicit ResultStore(sqlite3* db, std::string path);
@@ -165,6 +170,7 @@ class ResultStore {
   sqlite3* db_;
   std::string path_;
   bool has_device_columns_ = true;
+  bool has_sources_column_ = true;
   bool has_verdict_tables_ = true;  // shots and benchmarks (a read-only old store may lack them)
   bool writable_ = false;           // opened kReadWrite and switched to WAL
 };

@@ -7,6 +7,7 @@
 
 #include <functional>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -83,6 +84,35 @@ struct BenchmarkBatch {
   std::vector<Job> jobs;
 };
 std::vector<BenchmarkBatch> BenchmarkBatches(const std::vector<Job>& jobs);
+
+// Which rows of a store this shimmer would make as they are (the JobId of
+// the row's job is its id), and the kernels (BenchmarkCost::core) it would
+// time for their jobs; `legacy` counts rows from before per-kernel ids (no
+// sources). For report and prune; computing them compiles the kernels the
+// rows ran (the on-disk kernel cache makes that fast after a run).
+struct CurrentRowSet {
+  std::set<std::string> jobs, costs;
+  std::size_t legacy = 0;
+};
+CurrentRowSet FindCurrentRows(const std::vector<JobResult>& rows);
+
+// What `shimmer run` would do with this shard of `jobs` and the store at
+// options.db_path (none there: every job is new), rendering nothing. A job
+// whose id the store has is done; one that would run says why: "new job",
+// or, when the store has a row of the same description (JobDescription), what
+// moved (WhyRerun), or that the row is from before per-kernel ids.
+struct PlannedJob {
+  Job job;
+  std::string id;
+  std::vector<std::string> why;
+};
+struct RunPlan {
+  std::vector<PlannedJob> to_run;
+  int done = 0;
+  std::size_t legacy_rows = 0;  // rows of the store from before per-kernel ids
+};
+inline constexpr const char* kLegacyRowReason = "stored before per-kernel job ids (re-run once)";
+Result<RunPlan> PlanRun(const std::vector<Job>& jobs, const RunOptions& options);
 
 // Renders every job of `batch` at the benchmark size, interleaved, after one
 // warm-up frame each; GPU ms per frame from the renderer's timestamps.

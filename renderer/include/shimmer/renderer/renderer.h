@@ -156,6 +156,21 @@ class Renderer {
   std::unique_ptr<Impl> impl_;
 };
 
+// What a render's frames are made of, known without a device. `kernel` is
+// the canonical hash (shading::CanonicalSpirvHash) of the specialized kernel
+// module the render runs; `inputs` hashes everything that module reads: the
+// packed scene (primitives, BVH, normal-map texels), every frame's constants
+// (cameras, light, material, size), every frame's push constants (variant
+// parameters, replicates, seed, tolerance) and the round cap. Two settings
+// with equal fingerprints render equal frames; names (of the scene, the
+// variant) are not part of it.
+struct RenderFingerprint {
+  std::string kernel, inputs;
+};
+// Fails as Renderer::Create would on settings it rejects (the error names
+// the field) or a kernel that does not compile.
+Result<RenderFingerprint> FingerprintRender(const RenderSettings& settings);
+
 struct DeviceDescription {
   std::string name, driver;
   std::string type;  // "discrete", "integrated", "virtual", "cpu", "other"

@@ -1,0 +1,68 @@
+#include "kernel_inputs.h"
+
+#include <bit>
+
+#include "shimmer/renderer/scene.h"
+
+namespace shimmer::render {
+
+namespace {
+
+void Put(float* out, glm::dvec3 v, double w) {
+  out[0] = float(v.x), out[1] = float(v.y), out[2] = float(v.z), out[3] = float(w);
+}
+
+gpu::Camera ToGpu(const shading::CameraDesc& c) {
+  gpu::Camera g;
+  Put(g.pos_tan, c.pos, c.tan_half_fov_y);
+  Put(g.fwd_aspect, c.fwd, double(c.width) / double(c.height));
+  Put(g.right, c.right, 0);
+  Put(g.up, c.up, 0);
+  return g;
+}
+
+}  // namespace
+
+std::array<std::int32_t, 6> KernelSpecialization(const ResolvedVariant& variant, const RenderSettings& settings) {
+  return {variant.id,
+          static_cast<std::int32_t>(settings.derivatives),
+          variant.spp_n,
+          scene::SceneFeatures(settings.scene),
+          static_cast<std::int32_t>(settings.material.ndf),
+          variant.reference ? 1 : 0};
+}
+
+gpu::FrameConstants FrameConstantsOf(const RenderSettings& s, int index) {
+  auto camera = [&](int frame) { return scene::CameraAt(s.camera, s.scene.rig, frame, s.fps, s.width, s.height); };
+  gpu::FrameConstants f{};
+  f.cam = ToGpu(camera(index));
+  f.prev = ToGpu(camera(index - 1));
+  const shading::LightDesc& l = s.scene.light;
+  Put(f.light_a, l.vec, double(static_cast<int>(l.type)));
+  Put(f.light_b, l.radiance, l.radius);
+  // The NDF is specialization constant 4; a glint material's local lobe and density ride along.
+  Put(f.mat_a, {s.material.alpha.x, s.material.alpha.y, s.material.glint_alpha_l}, s.material.glint_density);
+  Put(f.mat_f0, s.material.f0, 0);
+  Put(f.mat_albedo, s.material.albedo, 0);
+  f.size[0] = s.width;
+  f.size[1] = s.height;
+  return f;
+}
+
+gpu::Push PushOf(const ResolvedVariant& variant, const RenderSettings& s, int index) {
+  gpu::Push push{};
+  const auto& p = variant.params;
+  push.params[0] = float(p.fp_max), push.params[1] = float(p.fp_min_cap);
+  push.params[2] = float(p.sigma2), push.params[3] = float(p.kappa);
+  push.params2[0] = float(p.nm_scale), push.params2[1] = float(p.curvature_scale);
+  push.params2[2] = float(p.curvature_bias), push.params2[3] = float(p.curvature_exponent);
+  push.round[1] = index;
+  push.round[2] = s.reference_replicates;
+  push.round[3] = std::bit_cast<std::int32_t>(s.seed);
+  const bool adaptive = variant.reference && s.reference_tolerance > 0;
+  push.target[0] = adaptive ? float(s.reference_tolerance) : 0.0f;
+  push.target[1] = float(kReferenceLuminanceFloor);
+  return push;
+}
+
+}  // namespace shimmer::render

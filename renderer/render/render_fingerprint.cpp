@@ -1,0 +1,53 @@
+// FingerprintRender: the kernel module and the bytes a render would upload,
+// hashed without a device.
+#include <span>
+#include <string_view>
+
+#include "kernel_inputs.h"
+#include "pipeline_cache.h"
+#include "shimmer/core/content_hash.h"
+#include "shimmer/renderer/renderer.h"
+#include "shimmer/renderer/scene.h"
+#include "variant_resolution.h"
+
+namespace shimmer::render {
+
+namespace {
+
+template <typename T>
+void Append(std::string& bytes, std::span<const T> values) {
+  bytes.append(reinterpret_cast<const char*>(values.data()), values.size_bytes());
+}
+template <typename T>
+void Append(std::string& bytes, const T& value) {
+  Append(bytes, std::span<const T>(&value, 1));
+}
+
+}  // namespace
+
+Result<RenderFingerprint> FingerprintRender(const RenderSettings& settings) {
+  if (Status s = ValidateSettings(settings); !s) return s.failure();
+  auto variant = ResolveVariant(settings);
+  if (!variant) return variant.failure();
+  const bool sg_light = settings.scene.light.type == shading::LightType::kSg;
+  auto module = KernelSpirv("render.comp", variant->user.get(), sg_light, nullptr);
+  if (!module) return module.failure();
+  const auto specialization = KernelSpecialization(*variant, settings);
+  auto kernel = SpecializedKernelHash(**module, specialization);
+  if (!kernel) return kernel.failure();
+
+  // The renderer's own structs, so that a field it uploads cannot be left out.
+  std::string bytes;
+  const std::vector<glm::vec4> words = scene::PackScene(settings.scene);
+  Append(bytes, std::span<const glm::vec4>(words));
+  for (int i = 0; i < settings.frames; ++i) {
+    Append(bytes, FrameConstantsOf(settings, i));
+    Append(bytes, PushOf(*variant, settings, i));
+  }
+  // How many rounds a reference pixel may take (the replicates ride in the push constants).
+  const bool adaptive = variant->reference && settings.reference_tolerance > 0;
+  Append(bytes, adaptive ? settings.max_rounds : 0);
+  return RenderFingerprint{*kernel, Fnv1a64Hex(bytes)};
+}
+
+}  // namespace shimmer::render

@@ -33,8 +33,9 @@ void PrintPlan(const std::string& spec, const std::string& shard, const experime
   for (const experiments::PlannedJob& p : plan.to_run) {
     std::string why;
     for (const std::string& w : p.why) why += (why.empty() ? "" : "; ") + w;
-    std::printf("  %s  %s %s %s %s %s: %s\n", p.id.c_str(), p.job.scene.c_str(), p.job.material.c_str(),
-                p.job.camera.c_str(), p.job.variant.c_str(), p.job.derivatives.c_str(), why.c_str());
+    const std::string params = p.job.params.empty() ? "" : " " + nlohmann::json(p.job.params).dump();
+    std::printf("  %s  %s %s %s %s%s %s: %s\n", p.id.c_str(), p.job.scene.c_str(), p.job.material.c_str(),
+                p.job.camera.c_str(), p.job.variant.c_str(), params.c_str(), p.job.derivatives.c_str(), why.c_str());
   }
 }
 

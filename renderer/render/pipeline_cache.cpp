@@ -174,10 +174,21 @@ Result<std::string> SpecializedKernelHash(const KernelModule& kernel, std::span<
     std::lock_guard lock(mutex);
     if (auto it = hashes->find(key); it != hashes->end()) return it->second;
   }
-  auto specialized = SpecializedModule(kernel, specialization);
-  if (!specialized) return specialized.failure();
-  auto hash = shading::CanonicalSpirvHash(*specialized);
-  if (!hash) return hash.failure();
+  // Canonicalizing inlines the whole kernel (about 0.5 s on lavapipe's
+  // machines): the 16 digits are kept on disk beside the modules.
+  const auto folder = CacheFolder("kernel-hashes");
+  const std::string file = Fnv1a64Hex(key + '\0' + shading::CanonicalHashVersion()) + ".txt";
+  std::optional<std::string> hash;
+  if (folder)
+    if (auto cached = ReadCacheFile(*folder / file, "kernel-hash"); cached && cached->size() == 16) hash = *cached;
+  if (!hash) {
+    auto specialized = SpecializedModule(kernel, specialization);
+    if (!specialized) return specialized.failure();
+    auto made = shading::CanonicalSpirvHash(*specialized);
+    if (!made) return made.failure();
+    hash = *made;
+    if (folder) WriteTrimmed(*folder, file, "kernel-hash", *hash);
+  }
   std::lock_guard lock(mutex);
   hashes->emplace(key, *hash);
   return *hash;

@@ -158,6 +158,9 @@ class StructuralHash {
 
 }  // namespace
 
+// Bump when the passes or the structural hash change.
+std::string CanonicalHashVersion() { return "structural-1 " + SpecializerVersion(); }
+
 Result<std::string> CanonicalSpirvHash(const Spirv& module) {
   using R = Result<std::string>;
   spvtools::Optimizer optimizer(SPV_ENV_VULKAN_1_2);
@@ -165,7 +168,22 @@ Result<std::string> CanonicalSpirvHash(const Spirv& module) {
   optimizer.SetMessageConsumer([&](spv_message_level_t level, const char*, const spv_position_t&, const char* text) {
     if (level <= SPV_MSG_ERROR) messages += std::string(text) + "; ";
   });
-  // Source lines (OpLine) sit inside function bodies: they go first.
+  // The variant, the derivative source and the scene's kinds reach the
+  // shading functions as arguments (the C++ oracle compiles the same code):
+  // only inlining them into main and propagating the frozen constants shows
+  // which code this kernel runs. Source lines (OpLine) sit inside function
+  // bodies: they go too.
+  optimizer.RegisterPass(spvtools::CreateMergeReturnPass())
+      .RegisterPass(spvtools::CreateInlineExhaustivePass())
+      .RegisterPass(spvtools::CreateEliminateDeadFunctionsPass())
+      .RegisterPass(spvtools::CreateLocalSingleStoreElimPass())
+      .RegisterPass(spvtools::CreateLocalMultiStoreElimPass())
+      .RegisterPass(spvtools::CreateCCPPass())
+      .RegisterPass(spvtools::CreateDeadBranchElimPass())
+      .RegisterPass(spvtools::CreateAggressiveDCEPass())
+      .RegisterPass(spvtools::CreateStripDebugInfoPass())
+      .RegisterPass(spvtools::CreateStripNonSemanticInfoPass())
+      .RegisterPass(spvtools::CreateEliminateDeadFunctionsPass());
   optimizer.RegisterPass(spvtools::CreateStripDebugInfoPass())
       .RegisterPass(spvtools::CreateStripNonSemanticInfoPass());
   spvtools::OptimizerOptions options;

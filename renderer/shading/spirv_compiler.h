@@ -41,14 +41,19 @@ Result<Spirv> SpecializeCompute(const Spirv& module, std::span<const std::int32_
 std::string SpecializerVersion();
 
 // A hash of what `module` computes, not of how its source was written
-// (spirv_canonical.cpp): debug and non-semantic instructions stripped, then
-// every id hashed by its content (a type or constant by its definition, a
-// function by its body, a local value by its place in its function), from
-// the entry point down. A comment, a renamed local, dead code, or another
-// order of the shared declarations (glslang declares a constant where it
-// first meets it, so an edit of one variant reorders every kernel's) leave it
-// as it was; an edit of code the module runs moves it. Job ids are built on
-// it (experiments/spec/job.h).
+// (spirv_canonical.cpp). A copy of the module has every function inlined into
+// the entry point and the frozen constants propagated (so a variant's code
+// leaves the kernels of the other variants), its debug and non-semantic
+// instructions stripped; then every id is hashed by its content (a type or
+// constant by its definition, a local value by its place), from the entry
+// point down. A comment, a renamed local, dead code, an edit of another
+// variant or another order of the shared declarations (glslang declares a
+// constant where it first meets it) leave it as it was; an edit of code the
+// kernel runs moves it. The optimizer keeps the arithmetic, so equal hashes
+// mean equal computations. Job ids are built on it (experiments/spec/job.h).
 Result<std::string> CanonicalSpirvHash(const Spirv& module);
+// Names the canonical form (its passes and the optimizer's version), for
+// cache keys of canonical hashes.
+std::string CanonicalHashVersion();
 
 }  // namespace shimmer::shading

@@ -103,7 +103,7 @@ struct Objective {
         used->insert(test_id);
         const nlohmann::json* none = measure.Metrics(none_job, none_id);
         const nlohmann::json* test = measure.Metrics(test_job, test_id);
-        if (!none || !test) return {std::nan(""), {}};
+        if (!none || !test) return {std::nan(""), 0, {}};
         ShotTerms t;
         t.scene = scene;
         t.camera = camera;

@@ -60,10 +60,32 @@ constexpr double kDefaultGlintAlphaL = 0.03;
 constexpr double kDefaultGlintDensity = 1e4;
 constexpr double kMaxGlintDensity = 1e12;
 
+// Primitives of the built-in scenes, every other field at its default.
+Primitive SpherePrimitive(glm::dvec3 centre, double radius) {
+  Primitive p;
+  p.type = Primitive::Type::kSphere;
+  p.a = centre;
+  p.radius = radius;
+  return p;
+}
+Primitive CapsulePrimitive(glm::dvec3 a, glm::dvec3 b, double radius) {
+  Primitive p;
+  p.type = Primitive::Type::kCapsule;
+  p.a = a, p.b = b;
+  p.radius = radius;
+  return p;
+}
+Primitive PlanePrimitive(double height) {
+  Primitive p;
+  p.type = Primitive::Type::kPlane;
+  p.radius = height;
+  return p;
+}
+
 Scene SphereScene() {
   Scene s;
   s.name = "sphere";
-  s.primitives.push_back({Primitive::Type::kSphere, {0, 0, 0}, {0, 0, 0}, 1.0});
+  s.primitives.push_back(SpherePrimitive({0, 0, 0}, 1.0));
   s.light = Directional({-0.5, 0.6, 0.8}, 3.0);
   s.material.alpha = {0.05, 0.05};
   s.rig = {{0, 0, 0}, 4.0, 15.0, 0.0, 35.0};
@@ -81,9 +103,9 @@ Scene SphereFieldScene() {
       double r = 0.03 + 0.22 * Hash01(id * 3 + 1) * Hash01(id * 3 + 2);
       double x = -3.0 + 6.0 * (i + 0.5) / n + 0.15 * (Hash01(id * 7 + 3) - 0.5);
       double z = -3.0 + 6.0 * (j + 0.5) / n + 0.15 * (Hash01(id * 7 + 4) - 0.5);
-      s.primitives.push_back({Primitive::Type::kSphere, {x, r, z}, {0, 0, 0}, r});
+      s.primitives.push_back(SpherePrimitive({x, r, z}, r));
     }
-  s.primitives.push_back({Primitive::Type::kPlane, {0, 0, 0}, {0, 0, 0}, 0.0});
+  s.primitives.push_back(PlanePrimitive(0.0));
   s.light = Directional({-0.4, 0.7, 0.6}, 3.0);
   s.material.alpha = {0.03, 0.03};
   s.rig = {{0, 0, 0}, 8.0, 35.0, 20.0, 45.0};
@@ -102,7 +124,7 @@ Scene WiresScene() {
     glm::dvec3 d{std::cos(phi), 0.25 * (Hash01(id * 5 + 4) - 0.5), std::sin(phi)};
     d = glm::normalize(d) * 1.2;
     double r = 0.006 + 0.012 * Hash01(id * 5 + 5);
-    s.primitives.push_back({Primitive::Type::kCapsule, c - d, c + d, r});
+    s.primitives.push_back(CapsulePrimitive(c - d, c + d, r));
   }
   s.light.type = shading::LightType::kSphere;
   s.light.vec = {-1.5, 2.5, 2.5};
@@ -325,7 +347,7 @@ Scene SgBumpyPlaneScene() {
 Scene SgPlaneScene() {
   Scene s;
   s.name = "sg-plane";
-  s.primitives.push_back({Primitive::Type::kPlane, {0, 0, 0}, {0, 0, 0}, 0.0});
+  s.primitives.push_back(PlanePrimitive(0.0));
   s.light = SgLight({0.0, 0.2, -1.0}, kBuiltinSgSharpness, 3.0);
   s.material.alpha = {0.1, 0.1};
   s.rig = {{0, 0, 0}, 6.0, 10.0, 0.0, 40.0};
@@ -352,7 +374,7 @@ Primitive WithMap(Primitive p, const std::string& map, glm::dvec2 scale) {
 Scene NmPlaneScene() {
   Scene s;
   s.name = "nm-plane";
-  s.primitives.push_back(WithMap({Primitive::Type::kPlane, {0, 0, 0}, {0, 0, 0}, 0.0}, "bumps", {0.25, 0.25}));
+  s.primitives.push_back(WithMap(PlanePrimitive(0.0), "bumps", {0.25, 0.25}));
   s.light = Directional({0.0, 0.35, -1.0}, 3.0);
   s.material.alpha = {0.05, 0.05};
   s.rig = {{0, 0, 0}, 6.0, 12.0, 0.0, 40.0};
@@ -363,7 +385,7 @@ Scene NmPlaneScene() {
 Scene NmSphereScene() {
   Scene s;
   s.name = "nm-sphere";
-  s.primitives.push_back(WithMap({Primitive::Type::kSphere, {0, 0, 0}, {0, 0, 0}, 1.0}, "bumps-fine", {4, 2}));
+  s.primitives.push_back(WithMap(SpherePrimitive({0, 0, 0}, 1.0), "bumps-fine", {4, 2}));
   s.light = Directional({-0.5, 0.6, 0.8}, 3.0);
   s.material.alpha = {0.05, 0.05};
   s.rig = {{0, 0, 0}, 4.0, 15.0, 0.0, 35.0};
@@ -376,7 +398,7 @@ Scene NmSphereScene() {
 Scene NmMagnifyScene() {
   Scene s;
   s.name = "nm-magnify";
-  s.primitives.push_back(WithMap({Primitive::Type::kPlane, {0, 0, 0}, {0, 0, 0}, 0.0}, "bumps", {0.02, 0.02}));
+  s.primitives.push_back(WithMap(PlanePrimitive(0.0), "bumps", {0.02, 0.02}));
   s.light = Directional({0.0, 0.8, -0.6}, 3.0);
   s.material.alpha = {0.05, 0.05};
   s.rig = {{0, 0, 0}, 2.0, 45.0, 0.0, 40.0};
@@ -399,7 +421,7 @@ shading::MaterialDesc GlintMaterial(glm::dvec2 alpha, double alpha_l, double den
 Scene GlintPlaneScene() {
   Scene s;
   s.name = "glint-plane";
-  s.primitives.push_back({Primitive::Type::kPlane, {0, 0, 0}, {0, 0, 0}, 0.0});
+  s.primitives.push_back(PlanePrimitive(0.0));
   s.light = Directional({0.0, 0.35, -1.0}, 3.0);
   s.material = GlintMaterial({0.3, 0.3}, 0.03, 1e4, 0.3);
   s.rig = {{0, 0, 0}, 6.0, 12.0, 0.0, 40.0};
@@ -411,7 +433,7 @@ Scene GlintPlaneScene() {
 Scene GlintSphereScene() {
   Scene s;
   s.name = "glint-sphere";
-  s.primitives.push_back({Primitive::Type::kSphere, {0, 0, 0}, {0, 0, 0}, 1.0});
+  s.primitives.push_back(SpherePrimitive({0, 0, 0}, 1.0));
   s.light = Directional({-0.5, 0.6, 0.8}, 3.0);
   s.material = GlintMaterial({0.2, 0.2}, 0.02, 1e5, 0.3);
   s.rig = {{0, 0, 0}, 4.0, 15.0, 0.0, 35.0};

@@ -78,7 +78,9 @@ TEST(Browser, ReportHtmlRendersEverySectionWithoutErrors) {
     EXPECT_NE(dom.find(">" + std::string(section) + "</h"), std::string::npos) << section;
   EXPECT_NE(dom.find("sphere / ggx:0.3 / orbit"), std::string::npos);  // the unconverged shot, listed
   EXPECT_NE(dom.find("<table"), std::string::npos);
-  if (fs::exists(dir / "rep" / "heatmap.svg")) EXPECT_NE(dom.find("<svg"), std::string::npos);
+  if (fs::exists(dir / "rep" / "heatmap.svg")) {
+    EXPECT_NE(dom.find("<svg"), std::string::npos);
+  }
   // The page's own messages: console output, resources that failed to load.
   const std::string log = ReadText(dir / "log.txt");
   for (const char* error : {"CONSOLE", "Uncaught", "Failed to load resource", "net::ERR_"})

@@ -22,7 +22,8 @@ inline JobResult MakeResult(const std::string& variant, double fp_max, double tv
   r.job.width = r.job.height = 32;
   r.job.frames = 8;
   r.job.fps = 30;
-  r.job.reference = {4, 0};
+  r.job.reference.spp = 4;
+  r.job.reference.tolerance = 0;
   // Rows of variants given parameters they lack (`none` with fp_max) do not
   // resolve: they keep the ids of their description.
   const auto sources = SourcesOf(r.job);

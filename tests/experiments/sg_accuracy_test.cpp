@@ -284,7 +284,9 @@ TEST(SgAccuracyReport, StoreWithSgShotsHasTheSectionAfterTheOverview) {
   EXPECT_NE(md.find("![SG lighting: energy error"), std::string::npos);
   EXPECT_TRUE(fs::exists(dir.path() / "rep" / "sg_accuracy.csv"));
   EXPECT_TRUE(fs::exists(dir.path() / "rep" / "sg_accuracy.gp"));
-  if (GnuplotAvailable()) EXPECT_TRUE(fs::exists(dir.path() / "rep" / "sg_accuracy.svg"));
+  if (GnuplotAvailable()) {
+    EXPECT_TRUE(fs::exists(dir.path() / "rep" / "sg_accuracy.svg"));
+  }
   const std::string html = ReadText(dir.path() / "rep" / "report.html");
   EXPECT_NE(html.find(std::string(">") + report::kSgAccuracyHeading + "</h"), std::string::npos);
 }

@@ -74,7 +74,8 @@ TEST(Spec, IdsAreStable) {
   j.width = j.height = 128;
   j.frames = 32;
   j.fps = 30;
-  j.reference = {8, 0};
+  j.reference.spp = 8;
+  j.reference.tolerance = 0;
   JobSources sources;
   sources.test = {"kernel-a", "inputs-a"};
   sources.reference = {"kernel-r", "inputs-r"};
@@ -277,8 +278,9 @@ TEST(Spec, CommittedSpecsParse) {
     EXPECT_TRUE(spec.ok()) << spec.error();
     ++specs;
     const std::string name = entry.path().stem().string();
-    if (spec.ok() && (name == "standard" || name == "normal-maps" || name == "engine-settings"))
+    if (spec.ok() && (name == "standard" || name == "normal-maps" || name == "engine-settings")) {
       EXPECT_FALSE(spec->fits.empty()) << name;
+    }
   }
   EXPECT_GE(specs, 5);
 }

@@ -27,6 +27,14 @@
 namespace shimmer::render {
 namespace {
 
+// Default hooks with the fields `set` sets.
+template <typename Set>
+testing::TestHooks HooksWith(Set set) {
+  testing::TestHooks hooks;
+  set(hooks);
+  return hooks;
+}
+
 constexpr double kPi = 3.14159265358979323846;
 
 RenderSettings Settings(const std::string& scene_name, const std::string& variant, shading::DerivativeSource d,
@@ -488,7 +496,7 @@ TEST(GpuRender, BandsOfRowsGiveTheFrameOfOneDispatch) {
     s.max_rounds = 4;
     Frame whole = RenderOne(s, 3);
     for (int rows : {8, 16}) {
-      testing::ScopedTestHooks hooks({.band_rows = rows});
+      testing::ScopedTestHooks hooks(HooksWith([&](testing::TestHooks& h) { h.band_rows = rows; }));
       Frame banded = RenderOne(s, 3);
       ASSERT_EQ(banded.planes.size(), whole.planes.size());
       EXPECT_EQ(banded.rounds, whole.rounds);
@@ -517,7 +525,7 @@ TEST(GpuRender, SpecializedKernelsRenderTheDriverSpecializedFrame) {
     RenderSettings s = k.Settings(24);
     s.max_rounds = 3;
     Frame ours = RenderOne(s, 2);
-    testing::ScopedTestHooks hooks({.driver_specializes = true});
+    testing::ScopedTestHooks hooks(HooksWith([](testing::TestHooks& h) { h.driver_specializes = true; }));
     Frame drivers = RenderOne(s, 2);
     ASSERT_EQ(ours.planes.size(), drivers.planes.size());
     ASSERT_FALSE(ours.planes.empty());
@@ -575,7 +583,7 @@ TEST(GpuRender, RenderersSharingAPipelineKeepTheirOwnParameters) {
   EXPECT_TRUE(same(a1, a2));
   EXPECT_TRUE(same(b1, b2));
   // And as a renderer alone in a fresh process would (its own device).
-  testing::ScopedTestHooks hooks({.lose_device_after_dispatches = 1000});  // a private device and pipeline
+  testing::ScopedTestHooks hooks(HooksWith([](testing::TestHooks& h) { h.lose_device_after_dispatches = 1000; }));  // a private device and pipeline
   EXPECT_TRUE(same(b1, RenderOne(b, 2)));
 }
 
@@ -659,7 +667,7 @@ TEST(GpuSequence, DeviceLostMidSequenceLeavesOnlyWholeFrames) {
   fs::remove_all(dir);
   RenderSettings s = Settings("sphere", "none", DerivativeSource::kQuadFine, 24);
   s.frames = 5;
-  testing::ScopedTestHooks hooks({.lose_device_after_dispatches = 3});  // warm-up, frames 0 and 1; 2 is lost
+  testing::ScopedTestHooks hooks(HooksWith([](testing::TestHooks& h) { h.lose_device_after_dispatches = 3; }));  // warm-up, frames 0 and 1; 2 is lost
   auto rendered = RenderSequence(s, dir.string(), nullptr);
   ASSERT_FALSE(rendered);
   EXPECT_EQ(rendered.code(), ErrorCode::kDeviceLost);

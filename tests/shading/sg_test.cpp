@@ -707,7 +707,9 @@ TEST(SgLightIrradiance, MatchesQuadrature) {
       worst = std::max(worst, err / std::max(exact, 1e-6 * total));
       EXPECT_LT(err, 1e-4 * exact + 1e-6 * total)
           << "lambda " << lambda << " beta " << beta << ": " << e.x << " vs " << exact;
-      if (e.x > 0) EXPECT_NEAR(e.z / e.x, 3, 1e-12);
+      if (e.x > 0) {
+        EXPECT_NEAR(e.z / e.x, 3, 1e-12);
+      }
       // The reference's one-sample estimate, averaged over a stratified grid
       // (whose midpoints do not reach the SG's far tail: 5e-5 of its total).
       double mean = 0;
@@ -774,7 +776,7 @@ TEST(SgLightMonteCarlo, UnbiasedAndItsErrorShrinksLikeInverseSqrtN) {
       *mean = sum / count;
       *se = std::sqrt(std::max(sum2 / count - *mean * *mean, 0.0) / (count - 1));
     };
-    double m1, se1, m4, se4;
+    double m1 = 0, se1 = 0, m4 = 0, se4 = 0;
     run(4000, &m1, &se1);
     run(16000, &m4, &se4);
     const std::string at = "alpha " + std::to_string(c.alpha) + " view " + std::to_string(c.view_deg) + " lambda " +

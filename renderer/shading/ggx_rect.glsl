@@ -389,17 +389,15 @@ real asinhRatio(real x) {
   return x < real(1e-3) ? real(1) - x * x / real(6) : asinh(x) / x;
 }
 
-// (asinh(b) - asinh(a)) / (b - a) for a <= b, 0 <= b, with d = b - a given
-// exactly, finite and without cancellation for any gap, zero included. For
-// a < 0 it is a weighted mean of asinhRatio(a) and asinhRatio(b) (magnitudes
-// only); for 0 <= a, asinh(b) - asinh(a) = asinh(x) with
+// (asinh(b) - asinh(a)) / (b - a) for 0 <= a <= b, with d = b - a given
+// exactly, finite and without cancellation for any gap, zero included:
+// asinh(b) - asinh(a) = asinh(x) with
 // x = b sqrt(1 + a^2) - a sqrt(1 + b^2) = d (b + a) / (b sqrt(1 + a^2) + a sqrt(1 + b^2)).
+// (A footprint across u = 0, a < 0, is folded before it gets here.)
 real asinhSlope(real a, real b, real d) {
-  real mixed = (b * asinhRatio(b) - a * asinhRatio(a)) / max(b - a, real(1e-37));
   real den = b * sqrt(real(1) + a * a) + a * sqrt(real(1) + b * b);
   real ratio = b > real(0) ? (b + a) / den : real(1);  // b = 0: a = b = 0, the limit 1
-  real same = asinhRatio(d * ratio) * ratio;
-  return a < real(0) ? mixed : same;
+  return asinhRatio(d * ratio) * ratio;
 }
 
 // Panel width in xi of the sinh rule's 8-point panels, and the panel cap.

@@ -79,22 +79,6 @@ real slopeDensityQuadratic(int ndf, real q, real det) {
   return real(1) / (norm * t * t);
 }
 
-// Slope density with a full symmetric roughness matrix R = [[r.x, r.y], [r.y, r.z]].
-// Where R is nearly singular, r.x r.z - r.y^2 and the quadratic form cancel;
-// callers that know how R was built should form both without cancellation
-// (k16Parallelogram does) and call slopeDensityQuadratic.
-real slopeDensityMatrix(int ndf, vec2 s, vec3 r) {
-  s = clampSlope(s);
-  real amin2 = ALPHA_MIN * ALPHA_MIN;
-  real r00 = max(r.x, amin2);
-  real r11 = max(r.z, amin2);
-  // Keep R positive definite when rounding makes det(R) ~ 0.
-  real det = max(r00 * r11 - r.y * r.y, amin2 * amin2);
-  // A form that rounds below zero would make exp(-q) overflow.
-  real q = max((r11 * s.x * s.x - real(2) * r.y * s.x * s.y + r00 * s.y * s.y) / det, real(0));
-  return slopeDensityQuadratic(ndf, q, det);
-}
-
 // 1 / h.z^4 for h = normalize(s.x, s.y, 1): the Jacobian from slope to solid angle.
 real slopeToSolidAngle(vec2 s) {
   s = clampSlope(s);

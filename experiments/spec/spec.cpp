@@ -789,10 +789,11 @@ Status CheckFitVariant(const Spec& spec, const std::string& variant, const std::
                            (names.empty() ? "none" : names) + ")");
   for (double bound : {lo, hi})
     if (Status s = shading::ValidateParam(param, bound); !s) return Status::Failure("bounds: " + s.error());
-  if (info->ggx_only)
-    for (const std::string& m : spec.materials)
-      if (scene::ParseMaterial(m, {})->ndf != shading::Ndf::kGgx)
-        return Status::Failure("takes GGX materials only, and the spec lists " + m);
+  // The rule the renderer applies to every job (variant_registry.cpp), so
+  // that a fit is refused here for what its renders would be refused for.
+  for (const std::string& m : spec.materials)
+    if (auto mismatch = shading::MaterialMismatch(*info, scene::ParseMaterial(m, {})->ndf))
+      return Status::Failure(*mismatch + " (the spec lists " + m + ")");
   return Ok();
 }
 

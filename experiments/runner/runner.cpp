@@ -1,5 +1,11 @@
 #include "shimmer/experiments/runner.h"
 
+#include <signal.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -7,6 +13,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <thread>
 
@@ -24,14 +31,43 @@ namespace shimmer::experiments {
 
 namespace fs = std::filesystem;
 
-// Renders into dir.partial and renames: a directory under its final name is
-// always a complete sequence. Returns its sequence.json.
-Result<SequenceFile> RenderInto(const render::RenderSettings& settings, const fs::path& dir) {
-  if (fs::exists(dir / "sequence.json")) {
-    auto done = ReadSequenceFile(dir / "sequence.json");
-    if (done && done->status == SequenceStatus::kComplete) return done;
+namespace {
+
+// The sequence.json of `dir` when a complete sequence is there.
+std::optional<SequenceFile> CompleteSequence(const fs::path& dir) {
+  std::error_code ec;
+  if (!fs::exists(dir / "sequence.json", ec)) return std::nullopt;
+  auto done = ReadSequenceFile(dir / "sequence.json");
+  if (done && done->status == SequenceStatus::kComplete) return *done;
+  return std::nullopt;
+}
+
+// Partial directories of `dir` that a killed process left (its pid is gone):
+// they would otherwise pile up in the frame cache.
+void RemoveAbandonedPartials(const fs::path& dir) {
+  const std::string prefix = dir.filename().string() + ".partial-";
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir.parent_path(), ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const int pid = std::atoi(name.c_str() + prefix.size());
+    if (pid > 0 && ::kill(pid, 0) != 0 && errno == ESRCH) fs::remove_all(entry.path(), ec);
   }
-  const fs::path partial = dir.string() + ".partial";
+}
+
+}  // namespace
+
+// Renders into a partial directory of this process and call of its own, then
+// renames it: a directory under its final name is always a complete
+// sequence, and two processes rendering the same frames into one frame cache
+// (`fit` and `run`, two runs) never write into each other's. The first to
+// finish is kept; the other's frames, equal by their id, are dropped.
+Result<SequenceFile> RenderInto(const render::RenderSettings& settings, const fs::path& dir) {
+  if (auto done = CompleteSequence(dir)) return *done;
+  RemoveAbandonedPartials(dir);
+  static std::atomic<unsigned> calls{0};
+  const fs::path partial =
+      dir.string() + ".partial-" + std::to_string(::getpid()) + "-" + std::to_string(calls.fetch_add(1));
   std::error_code ec;
   fs::remove_all(partial, ec);
   fs::create_directories(partial.parent_path(), ec);
@@ -40,11 +76,22 @@ Result<SequenceFile> RenderInto(const render::RenderSettings& settings, const fs
     fs::remove_all(partial, ec);
     return rendered.failure();
   }
-  fs::remove_all(dir, ec);
   fs::rename(partial, dir, ec);
-  if (ec)
-    return Result<SequenceFile>::Failure(dir.string() + ": cannot rename the rendered sequence (" + ec.message() + ")",
-                                         ErrorCode::kIo);
+  if (ec) {
+    if (auto done = CompleteSequence(dir)) {  // another process was first
+      fs::remove_all(partial, ec);
+      return *done;
+    }
+    // Something incomplete holds the name (a run of an older shimmer): ours replaces it.
+    std::error_code removed, renamed;
+    fs::remove_all(dir, removed);
+    fs::rename(partial, dir, renamed);
+    if (renamed) {
+      fs::remove_all(partial, ec);
+      return Result<SequenceFile>::Failure(
+          dir.string() + ": cannot rename the rendered sequence (" + renamed.message() + ")", ErrorCode::kIo);
+    }
+  }
   return rendered;
 }
 

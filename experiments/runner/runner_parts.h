@@ -13,8 +13,9 @@
 
 namespace shimmer::experiments {
 
-// Renders into dir.partial and renames: a directory under its final name is
-// always a complete sequence. A complete one already there is kept.
+// Renders into a partial directory of its own and renames it: a directory
+// under its final name is always a complete sequence. A complete one already
+// there (or one another process finishes first) is kept.
 Result<SequenceFile> RenderInto(const render::RenderSettings& settings, const std::filesystem::path& dir);
 
 std::filesystem::path ReferenceDirectory(const Job& job, const RunOptions& options);

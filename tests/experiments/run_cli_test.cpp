@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "cli_run.h"
+#include "shimmer/core/sequence_file.h"
 #include "shimmer/experiments/result_store.h"
 
 namespace shimmer::experiments {
@@ -86,7 +87,7 @@ TEST(RunCli, KilledRunResumesWithoutRecomputingOrCorrupting) {
   // Whatever was killed mid-write left no sequence under a final name.
   if (fs::exists(ws.dir / "part")) {
     for (const auto& entry : fs::directory_iterator(ws.dir / "part")) {
-      if (entry.path().extension() != ".partial") {
+      if (entry.path().filename().string().find(".partial-") == std::string::npos) {
         EXPECT_TRUE(fs::exists(entry.path() / "sequence.json")) << entry.path();
       }
     }
@@ -108,6 +109,45 @@ TEST(RunCli, KilledRunResumesWithoutRecomputingOrCorrupting) {
   std::ifstream log2(ws.dir / "log.txt");
   std::string text2((std::istreambuf_iterator<char>(log2)), {});
   EXPECT_NE(text2.find("(0 computed, 8 already done)"), std::string::npos) << text2.substr(text.size());
+}
+
+// `fit` and `run`, or two runs, on one frame cache: each renders into a
+// partial directory of its own, so both finish with the same numbers, every
+// sequence under a final name is whole, and no partial directory is left.
+TEST(RunCli, TwoProcessesOnOneFrameCacheTearNothing) {
+  Workspace ws;
+  std::vector<pid_t> pids;
+  for (const char* db : {"a.db", "b.db"}) {
+    pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      execl("/bin/sh", "sh", "-c", ws.Run(std::string("--db ") + db + " --work shared --keep-frames --no-benchmark --no-check").c_str(), nullptr);
+      _exit(127);
+    }
+    pids.push_back(pid);
+  }
+  for (pid_t pid : pids) {
+    int status = 0;
+    waitpid(pid, &status, 0);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
+  }
+  const auto a = Rows(ws.dir / "a.db"), b = Rows(ws.dir / "b.db");
+  ASSERT_EQ(a.size(), 8u);
+  EXPECT_EQ(a, b);
+  int sequences = 0;
+  for (const auto& entry : fs::directory_iterator(ws.dir / "shared")) {
+    EXPECT_EQ(entry.path().filename().string().find(".partial-"), std::string::npos) << entry.path();
+    auto sequence = ReadSequenceFile(entry.path() / "sequence.json");
+    ASSERT_TRUE(sequence) << entry.path() << ": " << sequence.error();
+    EXPECT_EQ(sequence->status, SequenceStatus::kComplete) << entry.path();
+    for (int f = 0; f < 5; ++f) {
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%04d.exr", f);
+      EXPECT_TRUE(fs::exists(entry.path() / name)) << entry.path() << " " << name;
+    }
+    ++sequences;
+  }
+  EXPECT_EQ(sequences, 8 + 2);  // the jobs' frames and the two shots' references
 }
 
 // Also: two jobs at once (--jobs 2) give the same rows as one at a time.

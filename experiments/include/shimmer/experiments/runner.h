@@ -1,8 +1,9 @@
 // Runs a spec's jobs: renders each shared reference once, renders each job,
 // measures it with the metrics library and stores one row per job. Finished
 // jobs (by id) are skipped, so a run killed at any point resumes losing
-// nothing: frames are rendered into "*.partial" directories and renamed only
-// when complete, and a row is committed only after its metrics exist.
+// nothing: frames are rendered into "*.partial-<pid>-<n>" directories of
+// their process and renamed only when complete, and a row is committed only
+// after its metrics exist.
 #pragma once
 
 #include <functional>

@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 
 #include "commands.h"
 #include "shimmer/experiments/job.h"
@@ -73,7 +74,14 @@ void Run(const RunCliOptions& o) {
   ro.check_shots = !o.no_check;
   if (!o.no_benchmark) ro.benchmark = spec.benchmark;
   const bool tty = isatty(fileno(stderr));
-  ro.progress = [tty](const experiments::RunProgress& p) { PrintProgress(p, tty); };
+  // A log (not a terminal) gets a line per computed job, not one per job
+  // found done: a resumed run would otherwise write a line per stored row.
+  ro.progress = [tty, skipped = std::make_shared<int>(0)](const experiments::RunProgress& p) {
+    const bool found_done = p.skipped != *skipped;
+    *skipped = p.skipped;
+    if (!tty && found_done && p.done != p.total) return;
+    PrintProgress(p, tty);
+  };
   const auto jobs = experiments::ExpandJobs(spec);
   const experiments::RunPlan plan = Take(experiments::PlanRun(jobs, ro));
   if (o.dry_run) {

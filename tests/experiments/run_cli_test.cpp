@@ -282,6 +282,43 @@ TEST(NormalMapCli, OnNmPlaneUnderDollyTheFiltersSteadyTheBumpsAndKeepTheirEnergy
 }
 
 // A shot whose reference moves beyond reference.converge is marked, and the run says so.
+// A store from before per-kernel ids (rows without sources, under ids of
+// the old scheme): `run` says so in one line and re-runs those jobs once,
+// the report shows the current rows only, and `prune` removes the old ones.
+TEST(RunCli, AStoreFromBeforePerKernelIdsRerunsOnceAndPrunes) {
+  Workspace ws;
+  ASSERT_EQ(std::system(ws.Run("--db r.db --work w --no-benchmark --no-check").c_str()), 0);
+  const auto current = Rows(ws.dir / "r.db");
+  ASSERT_EQ(current.size(), 8u);
+  // What an older shimmer wrote: other ids, no sources.
+  ASSERT_EQ(std::system(("sqlite3 " + (ws.dir / "r.db").string() +
+                         " \"UPDATE jobs SET id = 'old-' || id, sources = NULL\"")
+                            .c_str()),
+            0);
+  const std::size_t before = ReadText(ws.dir / "log.txt").size();
+  ASSERT_EQ(std::system(ws.Run("--db r.db --work w --no-benchmark --no-check").c_str()), 0);
+  const std::string log = ReadText(ws.dir / "log.txt").substr(before);
+  EXPECT_NE(log.find("8 rows were keyed by the shading core's text (before per-kernel job ids); their jobs run "
+                     "once more"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("(8 computed, 0 already done)"), std::string::npos) << log;
+  const auto both = Rows(ws.dir / "r.db");
+  EXPECT_EQ(both.size(), 16u);
+  for (const auto& [id, metrics] : current) EXPECT_EQ(both.at(id).at("tv_err"), metrics.at("tv_err")) << id;
+  // The report leaves the old rows out, with a note.
+  const std::string report = "cd " + ws.dir.string() + " && " + SHIMMER_EXE + " report r.db -o rep >>report.txt 2>&1";
+  ASSERT_EQ(std::system(report.c_str()), 0);
+  EXPECT_NE(ReadText(ws.dir / "report.txt").find("holds 8 rows made by other code or content"), std::string::npos)
+      << ReadText(ws.dir / "report.txt");
+  // prune removes exactly them, and a second run finds everything done.
+  const std::string prune = "cd " + ws.dir.string() + " && " + SHIMMER_EXE + " prune r.db >>prune.txt 2>&1";
+  ASSERT_EQ(std::system(prune.c_str()), 0);
+  EXPECT_NE(ReadText(ws.dir / "prune.txt").find("removed 8 jobs of older code or content"), std::string::npos)
+      << ReadText(ws.dir / "prune.txt");
+  EXPECT_EQ(Rows(ws.dir / "r.db"), current);
+}
+
 TEST(RunCli, AShotOutsideTheConvergenceToleranceIsMarkedUnconverged) {
   Workspace ws;
   std::string spec = ReadText(ws.dir / "tiny.json");

@@ -410,6 +410,17 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
   for (const Job& job : jobs)
     if (!job.external) reference_locks[ReferenceId(job)];
 
+  // The ETA counts the jobs left to compute, not those the store has.
+  int to_compute = 0;
+  for (const Job& job : jobs) {
+    auto has = store->Has(JobId(job));
+    if (!has) {
+      summary.error = has.failure();
+      return summary;
+    }
+    if (!*has) ++to_compute;
+  }
+
   const auto start = std::chrono::steady_clock::now();
   std::mutex mutex;  // guards the store, the summary and the progress
   RunProgress progress;
@@ -462,8 +473,9 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
       progress.current = what;
       progress.elapsed_s = SecondsSince(start);
       const int workers = std::max(1, options.jobs);
-      progress.eta_s =
-          summary.computed ? computed_s / summary.computed * (progress.total - progress.done) / workers : 0;
+      progress.eta_s = summary.computed
+                           ? computed_s / summary.computed * std::max(0, to_compute - summary.computed) / workers
+                           : 0;
       if (options.progress) options.progress(progress);
     }
   };

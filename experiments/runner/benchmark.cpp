@@ -66,20 +66,6 @@ std::string BenchmarkKernels(const BenchmarkBatch& batch, std::size_t k) {
   return Fnv1a64Hex(kernel(batch.jobs[k]) + '\0' + kernel(batch.jobs.front()));
 }
 
-CurrentRowSet FindCurrentRows(const std::vector<JobResult>& rows) {
-  CurrentRowSet current;
-  std::vector<Job> jobs;
-  for (const JobResult& r : rows) {
-    if (r.sources.is_null() && !r.job.external) ++current.legacy;
-    if (r.job.external || JobId(r.job) != r.id) continue;
-    current.jobs.insert(r.id);
-    jobs.push_back(r.job);
-  }
-  for (const BenchmarkBatch& batch : BenchmarkBatches(jobs))
-    for (std::size_t k = 0; k < batch.jobs.size(); ++k) current.costs.insert(BenchmarkKernels(batch, k));
-  return current;
-}
-
 Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, const BenchmarkOptions& bench,
                                                 const RunOptions& options) {
   using R = Result<std::vector<BenchmarkCost>>;

@@ -328,6 +328,20 @@ Status RunBenchmarks(const std::vector<Job>& all_jobs, const BenchmarkOptions& b
 
 }  // namespace
 
+CurrentRowSet FindCurrentRows(const std::vector<JobResult>& rows) {
+  CurrentRowSet current;
+  std::vector<Job> jobs;
+  for (const JobResult& r : rows) {
+    if (r.sources.is_null() && !r.job.external) ++current.legacy;
+    if (r.job.external || JobId(r.job) != r.id) continue;
+    current.jobs.insert(r.id);
+    jobs.push_back(r.job);
+  }
+  for (const BenchmarkBatch& batch : BenchmarkBatches(jobs))
+    for (std::size_t k = 0; k < batch.jobs.size(); ++k) current.costs.insert(BenchmarkKernels(batch, k));
+  return current;
+}
+
 Result<RunPlan> PlanRun(const std::vector<Job>& all_jobs, const RunOptions& options) {
   RunPlan plan;
   std::vector<JobResult> rows;

@@ -246,6 +246,14 @@ JobSources JobSources::FromJson(const json& j) {
 
 namespace {
 
+Result<render::RenderFingerprint> ReferenceFingerprint(const Job& job) {
+  auto reference = ReferenceSettingsOf(job);
+  if (!reference) return reference.failure();
+  auto fingerprint = render::FingerprintRender(*reference);
+  if (!fingerprint) return Prefixed("reference", fingerprint.failure());
+  return fingerprint;
+}
+
 Result<JobSources> ComputeSources(const Job& job) {
   JobSources sources;
   sources.metrics = std::string(metrics::MetricsCodeVersion());
@@ -255,11 +263,9 @@ Result<JobSources> ComputeSources(const Job& job) {
   auto fingerprint = render::FingerprintRender(*test);
   if (!fingerprint) return fingerprint.failure();
   sources.test = *fingerprint;
-  auto reference = ReferenceSettingsOf(job);
+  auto reference = ReferenceFingerprint(job);
   if (!reference) return reference.failure();
-  auto reference_fingerprint = render::FingerprintRender(*reference);
-  if (!reference_fingerprint) return Prefixed("reference", reference_fingerprint.failure());
-  sources.reference = *reference_fingerprint;
+  sources.reference = *reference;
   return sources;
 }
 
@@ -371,8 +377,7 @@ std::string ReferenceId(const Job& job) {
   JobSources sources = SourcesOrUnresolved(job);
   // A variant that does not resolve leaves its shot's reference as it is.
   if (sources.reference.kernel == "unresolved")
-    if (auto reference = ReferenceSettingsOf(job))
-      if (auto fingerprint = render::FingerprintRender(*reference)) sources.reference = *fingerprint;
+    if (auto reference = ReferenceFingerprint(job)) sources.reference = *reference;
   return ReferenceIdFrom(job, sources);
 }
 

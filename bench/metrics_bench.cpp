@@ -234,13 +234,12 @@ void BM_Bootstrap(benchmark::State& state) {
   m::TileBlockStatistics cells(block_frames);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(0, 1);
-  std::vector<float> sums(6 * static_cast<size_t>(blocks));
+  std::vector<float> sums(m::TileBlockStatistics::kCellSums * static_cast<size_t>(blocks));
   const m::BootstrapSettings settings;
   for (int tile = 0; tile < (width / settings.tile) * (height / settings.tile); ++tile) {
     const int index = cells.AddTile();
     for (float& v : sums) v = u(rng);
-    cells.AddPixel(index, u(rng), u(rng), &sums[0], &sums[blocks], &sums[2 * blocks], &sums[3 * blocks],
-                   &sums[4 * blocks], &sums[5 * blocks], u(rng), 1);
+    cells.AddPixel(index, u(rng), u(rng), sums.data(), u(rng), 1);
   }
   const m::TileBlockStatistics::Estimates point = cells.Evaluate({}, {});
   for (auto _ : state) {

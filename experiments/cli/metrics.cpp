@@ -67,6 +67,8 @@ void PrintText(const m::MetricsReport& r) {
     PrintOptional("temporal_diff_err", r.temporal_diff_err);
     PrintOptional("rmse", r.rmse);
     PrintWithInterval("relmse", r.relmse, ci.relmse);
+    PrintWithInterval("  temporal part", r.relmse_temporal, ci.relmse_temporal);
+    PrintWithInterval("  spatial part", r.relmse_spatial, ci.relmse_spatial);
   }
   std::printf("%-18s %.6g\n", "temporal_diff_test", r.temporal_diff_test);
   if (r.warp_err) std::printf("%-18s %.6g\n", "warp_err", *r.warp_err);

@@ -6,6 +6,7 @@
 #include <map>
 #include <sstream>
 
+#include "decision_rule.h"
 #include "report_parts.h"
 #include "shimmer/core/gnuplot.h"
 #include "shimmer/core/json_file.h"
@@ -73,13 +74,13 @@ std::string Verdict(const ObjectiveValue& fitted, const ObjectiveValue& shipped)
   const auto interval = [](const ObjectiveValue& v) {
     return report::Interval{v.j - v.half_width, v.j + v.half_width};
   };
-  switch (report::Compare(interval(fitted), interval(shipped))) {
+  switch (report::Separate(interval(fitted), interval(shipped))) {
     case report::Verdict::kBetter:
       return "fitted better";
     case report::Verdict::kWorse:
       return "shipped better";
     default:
-      return "within intervals";
+      return "tied (intervals overlap)";
   }
 }
 

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "decision_rule.h"
 #include "report_document.h"
 #include "report_parts.h"
 #include "shimmer/core/gnuplot.h"
@@ -68,13 +69,6 @@ Interval Ci95(const JobResult& row, const char* key) {
   const auto ci = MetricCi95(row.metrics, key);
   if (!ci) return {};
   return {ci->first, ci->second};
-}
-
-Verdict Compare(Interval a, Interval b) {
-  if (!a.Known() || !b.Known()) return Verdict::kUnknown;
-  if (a.hi < b.lo) return Verdict::kBetter;
-  if (b.hi < a.lo) return Verdict::kWorse;
-  return Verdict::kIndistinguishable;
 }
 
 const ShotCheck* CheckOf(const Group& group) {
@@ -335,6 +329,7 @@ Status WriteReport(const std::vector<JobResult>& rows, const std::string& title,
   for (const report::Group& g : groups)
     if (report::ConvergenceOf(g) != report::Convergence::kUnconverged) included.push_back(&g);
   for (report::PlotFile& f : report::Heatmap(report::Summarise(included), included)) files.push_back(std::move(f));
+  files.push_back({"cells.csv", report::CellsCsv(report::AnswerCells(included))});
   std::vector<std::string> scripts;
   for (const report::PlotFile& f : files) {
     if (Status s = dir.Write(f.name, f.text); !s) return s;

@@ -82,10 +82,10 @@ void JacobianPart(Document& doc, const std::vector<const Group*>& groups) {
       p->ratio_a.push_back(a->ratio), p->ratio_b.push_back(b->ratio);
       if (std::abs(b->energy_bias) < std::abs(a->energy_bias)) {
         ++p->closer;
-        const Verdict apart = Compare(Ci95(*b->row, "energy_bias"), Ci95(*a->row, "energy_bias"));
+        const Verdict apart = Separate(Ci95(*b->row, "energy_bias"), Ci95(*a->row, "energy_bias"));
         if (apart == Verdict::kBetter || apart == Verdict::kWorse) ++p->closer_apart;
       }
-      switch (Compare(Ci95(*b->row, "tv_err"), Ci95(*a->row, "tv_err"))) {
+      switch (Separate(Ci95(*b->row, "tv_err"), Ci95(*a->row, "tv_err"))) {
         case Verdict::kBetter: ++p->lower; break;
         case Verdict::kWorse: ++p->higher; break;
         default: ++p->overlap; break;
@@ -226,7 +226,7 @@ void EngineSettingsPart(Document& doc, const std::vector<JointFit>& fits) {
   const TransferCount out = CountTransfer(fits, true), alone = CountTransfer(fits, false);
   auto counts = [](const TransferCount& c) {
     return "fitted better in " + std::to_string(c.fitted_better) + ", shipped better in " +
-           std::to_string(c.shipped_better) + ", within intervals in " + std::to_string(c.within);
+           std::to_string(c.shipped_better) + ", tied (intervals overlap) in " + std::to_string(c.within);
   };
   if (out.fitted_better + out.shipped_better + out.within > 0)
     doc.Paragraph("Across geometry classes (each training scene left out, the setting fitted on the others): " +

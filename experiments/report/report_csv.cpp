@@ -1,9 +1,19 @@
+#include <algorithm>
+#include <map>
+
+#include "decision_rule.h"
 #include "report_parts.h"
 #include "shimmer/experiments/csv.h"
 
 namespace shimmer::experiments::report {
 
 std::string Csv(const std::vector<JobResult>& rows) {
+  // Each row's verdict is against its shot's `none` (a derivative-reading
+  // row's table has that same `none`).
+  auto shot = [](const JobResult& r) { return r.job.scene + " / " + r.job.material + " / " + r.job.camera; };
+  std::map<std::string, const JobResult*> none_of;
+  for (const JobResult& r : rows)
+    if (r.job.variant == "none" && (!r.job.external || !none_of.count(shot(r)))) none_of[shot(r)] = &r;
   std::vector<std::string> header = {
       "scene",    "material", "camera",      "variant",           "params", "derivatives",   "region",
       "tv_ratio", "tv_err",   "energy_bias", "temporal_diff_err", "relmse", "flicker_index", "ms_per_frame",
@@ -14,6 +24,10 @@ std::string Csv(const std::vector<JobResult>& rows) {
   header.insert(header.end(), {"tv_err_floor", "reference", "reference_spp", "check_spp", "d_tv_ref", "d_energy_bias",
                                "d_tv_err", "bench_median_ms", "bench_min_ms", "bench_max_ms", "bench_ratio_to_none",
                                "bench_width", "bench_height", "bench_device", "bench_driver"});
+  static constexpr const char* kSplit[] = {"relmse_temporal", "relmse_spatial"};
+  for (const char* key : kSplit)
+    header.insert(header.end(), {std::string(key), std::string(key) + "_lo", std::string(key) + "_hi"});
+  header.insert(header.end(), {"cell_row", "band", "verdict"});
   CsvTable table(header);
   for (const JobResult& r : rows) {
     const auto& m = r.metrics;
@@ -54,6 +68,19 @@ std::string Csv(const std::vector<JobResult>& rows) {
     } else {
       fields.insert(fields.end(), {"", "", "", "", "", "", "", ""});
     }
+    for (const char* key : kSplit) {
+      const Interval ci = Ci95(r, key);
+      fields.insert(fields.end(), {CsvNumber(Metric(m, key)), CsvNumber(ci.lo), CsvNumber(ci.hi)});
+    }
+    Group g;
+    g.scene = r.job.scene, g.material = r.job.material, g.alpha = AlphaOf(r.job.material);
+    const auto none = none_of.find(shot(r));
+    const Outcome outcome = none == none_of.end() ? Outcome::kUnknown
+                            : none->second == &r  ? Outcome::kBaseline
+                                                  : Decide(EvidenceOf(r), EvidenceOf(*none->second));
+    std::string verdict = OutcomeText(outcome);
+    verdict.erase(std::remove(verdict.begin(), verdict.end(), '*'), verdict.end());
+    fields.insert(fields.end(), {CellRowOf(g), RoughnessClass(g.alpha), verdict});
     table.AddRow(fields);
   }
   return table.Text();

@@ -1,6 +1,7 @@
 // What the report says, in order: the overview across shots (leaderboard,
 // heatmap, recommendations, shots left out), the per-shot tables, the method.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <map>
 #include <set>
@@ -13,11 +14,9 @@
 
 namespace shimmer::experiments::report {
 
-namespace {
+std::string Fmt(double v, const char* f) { return std::isnan(v) ? "n/a" : FormatNumber(v, f); }
 
-std::string Fmt(double v, const char* f = "%.4g") { return std::isnan(v) ? "n/a" : FormatNumber(v, f); }
-
-std::string WithInterval(double v, Interval ci, const char* f = "%.4g") {
+std::string WithInterval(double v, Interval ci, const char* f) {
   if (std::isnan(v)) return "n/a";
   std::string text = FormatNumber(v, f);
   if (ci.Known()) text += " [" + FormatNumber(ci.lo, f) + ", " + FormatNumber(ci.hi, f) + "]";
@@ -28,7 +27,7 @@ std::string Percent(double share) { return std::isnan(share) ? "n/a" : FormatNum
 
 std::string Code(const std::string& s) { return "`" + s + "`"; }
 
-std::string Join(const std::vector<std::string>& items, const std::string& sep = ", ") {
+std::string Join(const std::vector<std::string>& items, const std::string& sep) {
   std::string out;
   for (const std::string& s : items) out += (out.empty() ? "" : sep) + s;
   return out;
@@ -43,16 +42,7 @@ std::string Bounds(double lo, double hi) {
   return std::isnan(lo) || std::isnan(hi) ? "n/a" : "[" + Fmt(lo, "%.3g") + ", " + Fmt(hi, "%.3g") + "]";
 }
 
-// Cost ratios of one variant, one entry per benchmark device.
-std::string CostText(const VariantSummary& v, const std::vector<std::string>& devices, bool name_device) {
-  std::vector<std::string> parts;
-  for (const std::string& d : devices) {
-    auto it = v.cost_ratio.find(d);
-    if (it == v.cost_ratio.end()) continue;
-    parts.push_back(Fmt(it->second.median, "%.2f") + "×" + (name_device ? " on " + d : ""));
-  }
-  return parts.empty() ? "n/a" : Join(parts, "; ");
-}
+namespace {
 
 std::string CheckNumbers(const ShotCheck& c) {
   return "spp " + std::to_string(c.spp) + " vs " + std::to_string(c.check_spp) + " per axis; changes: tv_ref " +
@@ -62,55 +52,25 @@ std::string CheckNumbers(const ShotCheck& c) {
          (c.unconverged_pixels ? "; " + std::to_string(c.unconverged_pixels) + " pixel-frames above tolerance" : "");
 }
 
-std::string VerdictText(Verdict v) {
-  switch (v) {
-    case Verdict::kBetter: return "better";
-    case Verdict::kWorse: return "worse";
-    case Verdict::kIndistinguishable: return "indistinguishable";
-    case Verdict::kUnknown: break;
-  }
-  return "n/a (no intervals)";
-}
-
-void Overview(Document& doc, const std::vector<Group>& groups, const std::vector<JointFit>& engine_fits) {
-  std::vector<const Group*> included;
-  std::vector<const Group*> unconverged, unchecked;
-  for (const Group& g : groups) switch (ConvergenceOf(g)) {
-      case Convergence::kUnconverged: unconverged.push_back(&g); break;
-      case Convergence::kUnchecked: unchecked.push_back(&g), included.push_back(&g); break;
-      case Convergence::kConverged: included.push_back(&g); break;
-    }
-  const std::vector<VariantSummary> summaries = Summarise(included);
-  const std::vector<std::string> devices = BenchmarkDevices(included);
+void Overview(Document& doc, const std::vector<const Group*>& included, const std::vector<const Group*>& unconverged,
+              const std::vector<const Group*>& unchecked, const std::vector<CellAnswer>& cells,
+              const std::vector<JointFit>& engine_fits) {
   std::set<std::string> shots;
   for (const Group* g : included) shots.insert(g->Shot());
+  const std::vector<std::string> devices = BenchmarkDevices(included);
 
   doc.Heading(2, kOverviewHeading);
   doc.Paragraph(std::to_string(included.size()) + " tables (" + std::to_string(shots.size()) +
-                " shots × derivative sources) enter the overview; unconverged shots are left out (listed below). "
-                "Ratio: a variant's `tv_err` over `none`'s in the same table (below 1: steadier). Cost: benchmark "
-                "GPU time over `none`'s in the same batch" +
+                " shots × derivative sources) enter the answer; unconverged shots are left out (listed below). "
+                "Ratios are a variant's value over `none`'s in the same table. Joint error: `relmse`, the mean over "
+                "frames of the relative squared error against the reference frame (unitless). Cost: benchmark time "
+                "over `none`'s in the same batch" +
                 (devices.empty() ? std::string(" (no benchmark in this store: n/a)")
-                                 : ", on " + Join(devices, " and ") + (devices.size() > 1 ? ", one column each" : "")) +
+                                 : ", on " + Join(devices, " and ") +
+                                       (CpuDevice(devices) ? " (CPU time: lavapipe runs the shaders on the CPU)" : "")) +
                 ".");
-
-  doc.Heading(3, kLeaderboardHeading);
-  std::vector<std::string> header = {"variant", "tables", "median ratio (IQR)", "median 95 % bounds",
-                                     "|energy_bias| ≤ 0.10"};
-  for (const std::string& d : devices) header.push_back(devices.size() > 1 ? "cost ×none on " + d : "cost ×none");
-  if (devices.empty()) header.push_back("cost ×none");
-  std::vector<std::vector<std::string>> cells;
-  for (const VariantSummary& v : summaries) {
-    std::vector<std::string> row = {Code(v.label), std::to_string(v.ratio.n), Ratio(v.ratio),
-                                    Bounds(v.ratio_lo, v.ratio_hi), Percent(v.energy_share)};
-    for (const std::string& d : devices) {
-      auto it = v.cost_ratio.find(d);
-      row.push_back(it == v.cost_ratio.end() ? "n/a" : Fmt(it->second.median, "%.2f"));
-    }
-    if (devices.empty()) row.push_back("n/a");
-    cells.push_back(std::move(row));
-  }
-  doc.Table(header, cells);
+  CellDetails(doc, cells);
+  ClassLeaderboards(doc, included);
 
   doc.Heading(3, kHeatmapHeading);
   doc.Paragraph(
@@ -118,33 +78,7 @@ void Overview(Document& doc, const std::vector<Group>& groups, const std::vector
       "steady; × marks |energy_bias| > 0.10.");
   doc.Figures({"heatmap.svg"}, {"variants × shots: log10 tv_err ratio to none"});
 
-  doc.Heading(3, kRecommendationsHeading);
-  doc.Paragraph(RecommendationRule());
-  cells.clear();
-  for (const Recommendation& r : Recommend(included)) {
-    std::vector<std::string> row = {r.dimension + ": " + r.name,
-                                    std::to_string(r.tables) + " (" + std::to_string(r.shots) + " shots)"};
-    if (!r.pick) {
-      row.insert(row.end(), {"keep `none`: " + r.note, "", "", "", "", ""});
-    } else {
-      const VariantSummary& p = *r.pick;
-      row.push_back("**" + Code(p.label) + "**");
-      row.push_back(Ratio(p.ratio) + ", 95 % " + Bounds(p.ratio_lo, p.ratio_hi));
-      row.push_back(Fmt(p.energy_bias.median, "%+.3f") + " (within ±10 % in " + Percent(p.energy_share) + ")");
-      row.push_back(CostText(p, devices, devices.size() > 1));
-      row.push_back(r.runner_up ? Code(r.runner_up->label) + " " + Fmt(r.runner_up->ratio.median, "%.3g")
-                                : "no other qualifier");
-      row.push_back(r.runner_up
-                        ? VerdictText(r.verdict) + " (lower in " + std::to_string(r.better) + ", overlapping in " +
-                              std::to_string(r.overlapping) + ", higher in " + std::to_string(r.worse) +
-                              (r.unknown ? ", no intervals in " + std::to_string(r.unknown) : "") + ")"
-                        : "n/a");
-    }
-    cells.push_back(std::move(row));
-  }
-  doc.Table(
-      {"class", "tables", "pick", "gain: tv_err ratio", "energy bias", "cost ×none", "runner-up", "pick vs runner-up"},
-      cells);
+  ReferenceNoiseSection(doc, included);
 
   doc.Heading(3, kExcludedHeading);
   std::vector<std::string> items;
@@ -159,32 +93,43 @@ void Overview(Document& doc, const std::vector<Group>& groups, const std::vector
   if (!unchecked_shots.empty())
     items.push_back("**unchecked** (no convergence check in the store; kept in the overview): " +
                     Join(unchecked_shots, "; "));
-  if (items.empty()) items.push_back("none: every shot's reference was shown converged");
+  if (items.empty()) items.push_back("none: every shot's reference passed its convergence check");
   doc.List(items);
 
   BeyondThePapers(doc, included, engine_fits);
 }
 
+// A ratio to `none` with both intervals' worst cases as its interval.
+std::string RatioWithInterval(double value, Interval ci, double none_value, Interval none_ci) {
+  if (std::isnan(value) || !(none_value > 0)) return "n/a";
+  Interval ratio;
+  if (ci.Known() && none_ci.Known() && none_ci.lo > 0) ratio = {ci.lo / none_ci.hi, ci.hi / none_ci.lo};
+  return WithInterval(value / none_value, ratio, "%.3g");
+}
+
 void ShotTable(Document& doc, const Group& group, bool has_video) {
-  const Costs costs = CostsOf(group);
-  const std::vector<Sample> samples = SamplesOf(group);
   const std::string slug = Slug(group.key);
   doc.Heading(3, group.key);
+  const JobResult* none = NoneOf(group);
+  int unresolved = 0;
+  for (const JobResult* r : group.rows) unresolved += Metric(r->metrics, "tv_err_floor") > kNoiseShareLimit;
+  const std::string noise =
+      unresolved ? ", but " + std::to_string(unresolved) + " of its rows are **unresolved: reference noise**" : "";
 
   std::string reference;
   switch (ConvergenceOf(group)) {
     case Convergence::kConverged:
-      reference = "Reference: **converged** (" + CheckNumbers(*CheckOf(group)) + ").";
+      reference = "Reference: passed its convergence check" + noise + " (" + CheckNumbers(*CheckOf(group)) + ").";
       break;
     case Convergence::kUnconverged:
-      reference = "Reference: **unconverged**, left out of the overview (" + CheckNumbers(*CheckOf(group)) + ").";
+      reference = "Reference: **unconverged**, left out of the answer (" + CheckNumbers(*CheckOf(group)) + ").";
       break;
     case Convergence::kUnchecked:
       if (group.derivatives == kExternalDerivatives)
         reference = "Reference: each external sequence's own (unchecked: shimmer did not render it).";
       else
         reference = "Reference: **unchecked** (no convergence check in the store), " +
-                    std::to_string(group.rows.front()->job.reference.spp) + " spp per axis.";
+                    std::to_string(group.rows.front()->job.reference.spp) + " spp per axis" + noise + ".";
       break;
   }
   std::set<std::string> bench_devices;
@@ -193,18 +138,17 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
     if (r->cost) bench_devices.insert(r->cost->device), bench = &*r->cost;
   std::string cost;
   if (bench_devices.empty())
-    cost = "No benchmark: cost ×none n/a; render ms is the metric render's own GPU time (small renders, noisy).";
+    cost = "No benchmark: cost n/a.";
   else if (bench_devices.size() == 1 && bench->driver == "external")
-    cost = "Cost: the external sequences' own, on " + bench->device + "; cost ×none is to a `none` timed there.";
+    cost = "Cost: the external sequences' own, on " + bench->device + ", as a ratio to a `none` timed there.";
   else if (bench_devices.size() == 1)
-    cost = "Benchmark on " + bench->device + " (" + bench->driver + "), " + std::to_string(bench->width) + "×" +
-           std::to_string(bench->height) + ", " + std::to_string(bench->repetitions) +
-           " repetitions; cost ×none is to `none` in the same batch.";
+    cost = "Cost: benchmark on " + bench->device + " at " + std::to_string(bench->width) + "×" +
+           std::to_string(bench->height) + ", ratio to `none` in the same batch.";
   else
-    cost = "Benchmarks from " + std::to_string(bench_devices.size()) +
-           " devices: each row's cost ×none is to `none` on its own device (column bench device); no ratio across "
-           "devices.";
-  doc.Paragraph(reference + " " + cost + " Pareto cost: " + costs.source + ".");
+    cost = "Cost: each row's ratio to `none` on its own benchmark device (report.csv, column bench_device).";
+  doc.Paragraph(reference + " " + cost +
+                " Every column is in report.csv with the rest (region, `tv_err` itself, `tv_ratio`, "
+                "`flicker_index`, `tv_err_floor`, the temporal part of the joint error, ms).");
   doc.Figures({slug + "_pareto_tv_err.svg", slug + "_pareto_relmse.svg", slug + "_spectra.svg"},
               {"speed against tv_err", "speed against relmse", "flicker spectra"});
   if (has_video)
@@ -212,74 +156,29 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
                   "): the reference and up to 8 rows of this table (`none` first), each above its signed error "
                   "against the shot's reference, with the scale in the legend.");
 
-  // The shot's best: the lowest tv_err within ±10 % energy (filters only); rows
-  // whose interval overlaps its are indistinguishable from it.
-  int best = -1;
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    const JobResult& r = *samples[i].row;
-    const double err = Metric(r.metrics, "tv_err");
-    if (IsSupersample(r) || std::isnan(err) || !(std::abs(samples[i].energy_bias) <= kBiasTolerance)) continue;
-    if (best < 0 || err < Metric(samples[best].row->metrics, "tv_err")) best = int(i);
-  }
-  const bool many_devices = bench_devices.size() > 1;
-  std::vector<std::string> header = {"variant",
-                                     "region",
-                                     "tv_err [95 %]",
-                                     "tv_err ×none",
-                                     "vs best",
-                                     "tv_ratio [95 %]",
-                                     "energy_bias [95 %]",
-                                     "relmse [95 %]",
-                                     "flicker_index [95 %]",
-                                     "temporal_diff_err",
-                                     "tv_err_floor",
-                                     "cost ×none",
-                                     "bench ms (min–max)"};
-  if (many_devices) header.push_back("bench device");
-  header.insert(header.end(), {"render ms", "Pareto tv_err", "Pareto relmse"});
+  const Evidence base = none ? EvidenceOf(*none) : Evidence{};
+  // The lowest joint error of the table, among the rows better than `none`.
+  const JobResult* lowest = nullptr;
+  for (const JobResult* r : group.rows)
+    if (none && r != none && Decide(EvidenceOf(*r), base) == Outcome::kBetter &&
+        (!lowest || Metric(r->metrics, "relmse") < Metric(lowest->metrics, "relmse")))
+      lowest = r;
   std::vector<std::vector<std::string>> cells;
-  std::vector<std::string> alike;
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    const JobResult& r = *samples[i].row;
-    const auto& m = r.metrics;
-    std::string vs = "n/a";
-    if (int(i) == best) {
-      vs = "**best**";
-    } else if (best >= 0) {
-      switch (Compare(Ci95(r, "tv_err"), Ci95(*samples[best].row, "tv_err"))) {
-        case Verdict::kBetter: vs = "lower"; break;
-        case Verdict::kWorse: vs = "higher"; break;
-        case Verdict::kIndistinguishable: vs = "≈ indistinguishable", alike.push_back(Code(Label(r))); break;
-        case Verdict::kUnknown: break;
-      }
-    }
-    std::vector<std::string> row = {Code(Label(r)),
-                                    Region(r),
-                                    WithInterval(Metric(m, "tv_err"), Ci95(r, "tv_err")),
-                                    Fmt(samples[i].ratio, "%.3g"),
-                                    vs,
-                                    WithInterval(Metric(m, "tv_ratio"), Ci95(r, "tv_ratio")),
-                                    WithInterval(Metric(m, "energy_bias"), Ci95(r, "energy_bias"), "%+.3f"),
-                                    WithInterval(Metric(m, "relmse"), Ci95(r, "relmse")),
-                                    WithInterval(FlickerIndex(m), Ci95(r, "flicker_index")),
-                                    Fmt(Metric(m, "temporal_diff_err")),
-                                    Fmt(Metric(m, "tv_err_floor"), "%.2f"),
-                                    r.cost ? Fmt(r.cost->ratio_to_none, "%.2f") : "n/a",
-                                    r.cost ? Fmt(r.cost->median_ms, "%.3g") + " (" + Fmt(r.cost->min_ms, "%.3g") + "–" +
-                                                 Fmt(r.cost->max_ms, "%.3g") + ")"
-                                           : "n/a"};
-    if (many_devices) row.push_back(r.cost ? r.cost->device : "n/a");
-    row.insert(row.end(),
-               {r.job.external && !(r.gpu_ms_per_frame > 0) ? std::string("n/a") : Fmt(r.gpu_ms_per_frame, "%.2f"), costs.front_tv_err[i] ? "●" : "", costs.front_relmse[i] ? "●" : ""});
-    cells.push_back(std::move(row));
+  for (const JobResult* r : group.rows) {
+    const Evidence e = EvidenceOf(*r);
+    const Outcome outcome = !none ? Outcome::kUnknown : r == none ? Outcome::kBaseline : Decide(e, base);
+    std::string verdict = OutcomeText(outcome);
+    if (r == lowest) verdict += ", lowest joint error";
+    cells.push_back({Code(Label(*r)), WithInterval(e.joint, e.joint_ci, "%.3g"),
+                     RatioWithInterval(e.tv_err, e.tv_err_ci, base.tv_err, base.tv_err_ci),
+                     RatioWithInterval(e.spatial, e.spatial_ci, base.spatial, base.spatial_ci),
+                     WithInterval(e.energy_bias, e.energy_ci, "%+.3f"),
+                     r->cost ? Fmt(r->cost->ratio_to_none, "%.2f") + "×" : "n/a", verdict});
   }
-  doc.Table(header, cells);
-  if (best >= 0)
-    doc.Paragraph("Lowest `tv_err` within ±10 % energy: " + Code(Label(*samples[best].row)) + " (ratio to `none` " +
-                  Fmt(samples[best].ratio, "%.3g") +
-                  "); indistinguishable from it: " + (alike.empty() ? std::string("none") : Join(alike)) + ".");
-  else
-    doc.Paragraph("No filter stays within ±10 % energy in this table.");
+  doc.Table({"variant", "joint error [95 %]", "tv_err, ratio to `none` [95 %]",
+             "spatial error, ratio to `none` [95 %]", "energy bias, fraction [95 %]", "cost, ratio to `none`",
+             "verdict"},
+            cells);
 }
 
 // Seed 004's approximations measured on their own, beside the shots that use them.
@@ -340,14 +239,18 @@ void SparkleSection(Document& doc, const std::vector<Group>& groups) {
       if (!reference_row && !ref.empty()) {
         cells.push_back({g.Shot(), "reference", Fmt(number(ref, "mean_count"), "%.1f"),
                          Fmt(number(ref, "count_cv"), "%.3f"), Fmt(number(ref, "mean_lifetime"), "%.2f"), "", "",
-                         ""});
+                         "", ""});
         reference_row = true;
       }
       const nlohmann::json& test = (*sp)["test"];
+      const JobResult* baseline = NoneOf(g);
+      const Outcome outcome = !baseline        ? Outcome::kUnknown
+                              : baseline == r ? Outcome::kBaseline
+                                              : Decide(EvidenceOf(*r), EvidenceOf(*baseline));
       cells.push_back({g.Shot(), Code(r->job.variant), Fmt(number(test, "mean_count"), "%.1f"),
                        Fmt(number(test, "count_cv"), "%.3f"), Fmt(number(test, "mean_lifetime"), "%.2f"),
                        Fmt(number(*sp, "mean_count_ratio"), "%.3g"), Fmt(number(*sp, "count_variance_ratio"), "%.3g"),
-                       Fmt(number(*sp, "lifetime_ratio"), "%.3g")});
+                       Fmt(number(*sp, "lifetime_ratio"), "%.3g"), OutcomeText(outcome)});
     }
   }
   if (cells.empty()) return;
@@ -358,7 +261,7 @@ void SparkleSection(Document& doc, const std::vector<Group>& groups) {
                 "flickers); lifetime: mean frames a sparkle stays bright, tracked through the motion vectors. "
                 "Ratios are the variant's over the reference's: 1 is the reference's glitter.");
   doc.Table({"shot", "variant", "count", "count CV", "lifetime", "count ratio", "count variance ratio",
-             "lifetime ratio"},
+             "lifetime ratio", "verdict against `none`"},
             cells);
 }
 
@@ -410,9 +313,23 @@ void ExternalSequencesSection(Document& doc, const std::vector<Group>& groups) {
 
 }  // namespace
 
+std::string Anchor(const std::string& heading) {
+  // GitHub's: lower case, letters, digits, '-' and '_' kept (non-ASCII bytes
+  // too), spaces to '-', the rest dropped; so links work in report.md there
+  // and in report.html alike.
+  std::string out;
+  for (unsigned char c : heading) {
+    if (c >= 0x80 || std::isalnum(c) || c == '-' || c == '_')
+      out += char(c >= 0x80 ? c : std::tolower(c));
+    else if (c == ' ')
+      out += '-';
+  }
+  return out;
+}
+
 void Document::Heading(int level, const std::string& text) {
   Block b;
-  b.kind = Block::Kind::kHeading, b.level = level, b.text = text, b.id = Slug(text);
+  b.kind = Block::Kind::kHeading, b.level = level, b.text = text, b.id = Anchor(text);
   blocks.push_back(std::move(b));
 }
 void Document::Paragraph(const std::string& text) {
@@ -446,13 +363,23 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
   if (devices.empty()) devices.insert("none (external sequences only)");
   std::vector<std::string> device_list(devices.begin(), devices.end());
 
+  std::vector<const Group*> included, unconverged, unchecked;
+  for (const Group& g : groups) switch (ConvergenceOf(g)) {
+      case Convergence::kUnconverged: unconverged.push_back(&g); break;
+      case Convergence::kUnchecked: unchecked.push_back(&g), included.push_back(&g); break;
+      case Convergence::kConverged: included.push_back(&g); break;
+    }
+  const std::vector<CellAnswer> cells = AnswerCells(included);
+
   Document doc;
   doc.title = title;
   doc.Paragraph("Generated by `shimmer report` from " + std::to_string(jobs) + " jobs; metric renders on " +
-                Join(device_list) + ". Which filter to use: the overview; each shot's numbers: the tables below; " +
-                "definitions: the method at the end. Raw rows: [report.csv](report.csv); this report as one page: " +
-                "[report.html](report.html).");
-  Overview(doc, groups, engine_fits);
+                Join(device_list) + ". Which filter to use: the answer below; each shot's numbers: the Shots "
+                "section; definitions: the Method. Raw rows: [report.csv](report.csv) (every column), the answer "
+                "as [cells.csv](cells.csv); this report as one page: [report.html](report.html).");
+  AnswerSection(doc, cells, BenchmarkDevices(included));
+  const std::size_t contents = doc.blocks.size();
+  Overview(doc, included, unconverged, unchecked, cells, engine_fits);
   if (sg) SgAccuracySection(doc, *sg);
   NormalMapMemorySection(doc, groups);
   SparkleSection(doc, groups);
@@ -461,23 +388,36 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
   doc.Heading(2, kShotsHeading);
   doc.Paragraph(
       "Ordered by scene, roughness α, camera and derivative source. Values carry their 95 % interval in "
-      "brackets where the store has one. vs best: the row against the table's lowest `tv_err` within ±10 % "
-      "energy (filters, not supersample-N); `≈ indistinguishable` when the intervals overlap, `lower`/"
-      "`higher` only when they separate.");
+      "brackets. Verdict: the row against the table's `none` by the decision rule (Method); \"lowest joint "
+      "error\" marks the best of the rows that are better than `none`.");
   for (const Group& g : groups) ShotTable(doc, g, videos && videos->count(g.key));
   doc.Heading(2, kMethodHeading);
+  doc.Paragraph("**Decision rule.** " + DecisionRuleText());
   doc.Paragraph(
-      "Metrics are defined in docs/metrics.md: temporal variance of the error against the supersampled reference "
-      "(`tv_err`), its ratio to the reference's own (`tv_ratio`), signed `energy_bias`, `temporal_diff_err`, spatial "
-      "`relmse`, `flicker_index` (sensitivity-weighted error spectrum); `tv_err_floor` is the share of `tv_err` that "
-      "the reference's own noise explains (near 1: the reference cannot resolve the difference). Intervals are 95 % "
-      "(reference error propagated, block bootstrap over frames and pixels). Region: the pixels measured "
-      "(`highlight`: the reference's highlight mask). A reference is converged when `none` measured against it at N "
-      "and at 2N samples per axis agrees within the spec's tolerances. Cost: dedicated benchmark renders, variants "
-      "interleaved in one batch per device, median GPU ms per frame with min–max, as a ratio to `none` of the same "
-      "batch; render ms is the metric render's own time, used for a Pareto front only without a benchmark. Pareto: "
-      "no other variant of the table is both cheaper and lower in that error; `supersample-N` is the brute-force "
-      "baseline. Medians and quartiles interpolate linearly between order statistics.");
+      "**Metrics** are defined in docs/metrics.md: the joint error `relmse` (mean over frames of the relative "
+      "squared error against the reference frame, unitless) and its split into a temporal part (the error's "
+      "weighted variance about each pixel's temporal mean) and a spatial part (that mean's error, "
+      "`relmse_spatial`); `tv_err`, the temporal variance of the error against the supersampled reference "
+      "(luminance², as a ratio to `none` in the tables); signed `energy_bias` (a fraction of the reference's "
+      "energy); `flicker_index` (sensitivity-weighted error spectrum); `tv_err_floor`, the share of `tv_err` "
+      "that the reference's own noise explains. Intervals are 95 % (reference error propagated, block bootstrap "
+      "over frames and pixels); a ratio's interval combines the two intervals' worst cases. Region: the pixels "
+      "measured (`highlight`: the reference's highlight mask). A reference passes its convergence check when "
+      "`none` measured against it at N and at 2N samples per axis agrees within the spec's tolerances. Cost: "
+      "dedicated benchmark renders, variants interleaved in one batch per device, median time per frame as a "
+      "ratio to `none` of the same batch; on lavapipe this is CPU time. Pareto plots: no other variant of the "
+      "table is both cheaper and lower in that error. Medians and quartiles interpolate linearly between order "
+      "statistics.");
+  // The table of contents: every section after the answer.
+  std::vector<std::string> items;
+  for (const Block& b : doc.blocks)
+    if (b.kind == Block::Kind::kHeading && b.level == 2 && b.text != kAnswerHeading)
+      items.push_back("[" + b.text + "](#" + b.id + ")");
+  Block heading, list;
+  heading.kind = Block::Kind::kHeading, heading.level = 2, heading.text = kContentsHeading,
+  heading.id = Anchor(kContentsHeading);
+  list.kind = Block::Kind::kList, list.items = std::move(items);
+  doc.blocks.insert(doc.blocks.begin() + std::ptrdiff_t(contents), {heading, list});
   return doc;
 }
 

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "decision_rule.h"
 #include "report_parts.h"
 #include "shimmer/experiments/fit_run.h"
 #include "shimmer/experiments/sg_accuracy.h"
@@ -39,11 +40,27 @@ struct Document {
   void Figures(std::vector<std::string> files, std::vector<std::string> captions);
 };
 
+// The text of numbers, shared by the parts of the document: a value ("n/a"
+// for NaN), with its interval in brackets, a share in per cent, `code`, a
+// joined list, quartiles as "median (IQR q1–q3)", and "[lo, hi]".
+std::string Fmt(double v, const char* f = "%.4g");
+std::string WithInterval(double v, Interval ci, const char* f = "%.4g");
+std::string Percent(double share);
+std::string Code(const std::string& s);
+std::string Join(const std::vector<std::string>& items, const std::string& sep = ", ");
+std::string Ratio(const Quartiles& q);
+std::string Bounds(double lo, double hi);
+// A heading's anchor as GitHub makes it ("Reference noise" -> "reference-noise").
+std::string Anchor(const std::string& heading);
+
 // The section headings every report has (the browser test looks for them).
+inline constexpr const char* kAnswerHeading = "Answer";
+inline constexpr const char* kContentsHeading = "Contents";
 inline constexpr const char* kOverviewHeading = "Overview";
-inline constexpr const char* kLeaderboardHeading = "Leaderboard";
+inline constexpr const char* kCellsHeading = "Cells in detail";
+inline constexpr const char* kLeaderboardHeading = "Leaderboards by class";
 inline constexpr const char* kHeatmapHeading = "Heatmap";
-inline constexpr const char* kRecommendationsHeading = "Recommendations";
+inline constexpr const char* kReferenceNoiseHeading = "Reference noise";
 inline constexpr const char* kExcludedHeading = "Shots left out";
 inline constexpr const char* kBeyondHeading = "Beyond the papers";
 inline constexpr const char* kShotsHeading = "Shots";
@@ -68,6 +85,17 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
 // GGX rect against seed 000's, TK19's forward filter against K16's with its
 // Fig. 1 ordering, and the engine settings of `engine_fits`.
 void BeyondThePapers(Document& doc, const std::vector<const Group*>& groups, const std::vector<JointFit>& engine_fits);
+
+// The answer (report_answer.cpp): the grid of cells and how to read it, the
+// cells in detail, one leaderboard per row of the grid, the rows that the
+// reference's noise leaves unresolved, and the cells as CSV (cells.csv).
+// `devices`: the benchmark devices (a CPU device gets a sentence saying so).
+void AnswerSection(Document& doc, const std::vector<CellAnswer>& cells, const std::vector<std::string>& devices);
+void CellDetails(Document& doc, const std::vector<CellAnswer>& cells);
+void ClassLeaderboards(Document& doc, const std::vector<const Group*>& groups);
+void ReferenceNoiseSection(Document& doc, const std::vector<const Group*>& groups);
+std::string CellsCsv(const std::vector<CellAnswer>& cells);
+bool CpuDevice(const std::vector<std::string>& devices);
 
 std::string ToMarkdown(const Document& doc);
 // One GitHub-flavoured table ('|' in cells escaped), ending in a newline.

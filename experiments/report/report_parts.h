@@ -19,10 +19,6 @@ namespace shimmer::experiments::report {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// A filter must keep the highlight: one that flattens it scores a low tv_err
-// by losing energy, so verdicts only count rows within this energy bias.
-constexpr double kBiasTolerance = 0.10;
-
 // One table and set of plots: the rows of a (scene, material, camera,
 // derivatives) shot, sorted by label. `none` and `supersample-N` read no
 // derivatives; they join every derivative group of their shot as baselines.
@@ -63,9 +59,8 @@ struct Interval {
 };
 Interval Ci95(const JobResult& row, const char* key);
 
-// Lower is better. kBetter only when a's interval lies wholly below b's.
+// Lower is better; decision_rule.h's Separate decides which.
 enum class Verdict { kBetter, kWorse, kIndistinguishable, kUnknown };
-Verdict Compare(Interval a, Interval b);
 
 enum class Convergence { kConverged, kUnconverged, kUnchecked };
 // From the rows' ShotCheck: unconverged when any says so, unchecked when none has one.
@@ -99,7 +94,7 @@ struct VariantSummary {
   std::vector<Sample> samples;
   Quartiles ratio;                          // over the tables
   double ratio_lo = kNaN, ratio_hi = kNaN;  // medians of the per-table interval bounds
-  double energy_share = kNaN;               // share of tables with |energy_bias| <= kBiasTolerance
+  double energy_share = kNaN;               // share of tables with |energy_bias| <= kEnergyTolerance (decision_rule.h)
   Quartiles energy_bias;
   std::map<std::string, Quartiles> cost_ratio;  // benchmark ratio_to_none by device
 };
@@ -107,29 +102,6 @@ struct VariantSummary {
 std::vector<VariantSummary> Summarise(const std::vector<const Group*>& groups);
 // The benchmark devices of the rows, in name order.
 std::vector<std::string> BenchmarkDevices(const std::vector<const Group*>& groups);
-
-struct Recommendation {
-  std::string dimension;  // "roughness" or "geometry"
-  std::string name;       // the class
-  int tables = 0, shots = 0;
-  const VariantSummary* pick = nullptr;  // into `summaries`; null: keep `none`
-  const VariantSummary* runner_up = nullptr;
-  int better = 0, worse = 0, overlapping = 0, unknown = 0;  // pick against runner-up, per shared table
-  Verdict verdict = Verdict::kUnknown;
-  std::string note;  // why there is no pick
-  std::vector<VariantSummary> summaries;
-};
-// The rule (RecommendationRule() says it in words): among variants other than
-// `none` measured in at least 3/4 of the class's tables, those within
-// ±kBiasTolerance energy in at least 3/4 of theirs; the lowest median tv_err
-// ratio wins if below 1. supersample-N only when its median benchmark cost
-// ratio is known and at most the best filter's.
-std::vector<Recommendation> Recommend(const std::vector<const Group*>& groups);
-std::string RecommendationRule();
-// Pick against runner-up: kBetter when the pick's tv_err interval lies below
-// the runner-up's in at least half the shared tables and above in none;
-// kUnknown when no shared table has both intervals.
-Verdict ClassVerdict(int better, int worse, int overlapping);
 
 // Cost for a group's Pareto front: the benchmark's median ms when every row
 // has one from one device, else the metric render's time when every row ran
@@ -160,7 +132,7 @@ struct PlotFile {
 };
 std::vector<PlotFile> Plots(const Group& group);
 // Variants (leaderboard order) x tables: log10 of the tv_err ratio to `none`,
-// crossed where |energy_bias| > kBiasTolerance. Files "heatmap.*".
+// crossed where |energy_bias| > kEnergyTolerance (decision_rule.h). Files "heatmap.*".
 std::vector<PlotFile> Heatmap(const std::vector<VariantSummary>& variants, const std::vector<const Group*>& groups);
 
 }  // namespace shimmer::experiments::report

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "decision_rule.h"
 #include "report_parts.h"
 #include "shimmer/experiments/output_files.h"
 #include "shimmer/experiments/report.h"
@@ -113,7 +114,7 @@ std::vector<PlotFile> Plots(const Group& group) {
 std::vector<PlotFile> Heatmap(const std::vector<VariantSummary>& variants, const std::vector<const Group*>& groups) {
   std::ostringstream data, crosses, gp;
   data << "# table variant log10(tv_err / tv_err(none)): one block per table\n";
-  crosses << "# table variant: |energy_bias| > " << kBiasTolerance << "\n";
+  crosses << "# table variant: |energy_bias| > " << kEnergyTolerance << "\n";
   int crossed = 0;
   double extent = 0.5;
   for (std::size_t x = 0; x < groups.size(); ++x) {
@@ -122,7 +123,7 @@ std::vector<PlotFile> Heatmap(const std::vector<VariantSummary>& variants, const
       for (const Sample& s : variants[y].samples)
         if (s.group == groups[x]) {
           if (s.ratio > 0) value = std::log10(s.ratio);
-          if (std::abs(s.energy_bias) > kBiasTolerance) crosses << x << " " << y << "\n", ++crossed;
+          if (std::abs(s.energy_bias) > kEnergyTolerance) crosses << x << " " << y << "\n", ++crossed;
         }
       if (!std::isnan(value)) extent = std::max(extent, std::min(3.0, std::abs(value)));
       data << x << " " << y << " " << Number(value) << "\n";

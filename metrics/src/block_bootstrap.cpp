@@ -10,9 +10,12 @@ namespace shimmer::metrics {
 
 namespace {
 
-// Row layout: the scalars, then six per-block sums.
+// Row layout: the scalars, then seven per-block sums: test and reference
+// sums, the squared deviations of T, R and E from each pixel's temporal
+// mean, the relMSE terms, and their weighted deviations from each pixel's
+// weighted mean error.
 enum Scalar { kPixels, kFlickerPower, kFlickerSegments, kT0, kR0, kScalars };
-enum PerBlock { kST, kSR, kDT, kDR, kDE, kSQ, kPerBlock };
+enum PerBlock { kST, kSR, kDT, kDR, kDE, kSQ, kDQ, kPerBlock };
 
 // SplitMix64 (Steele, Lea & Flood 2014): the same draws on every platform,
 // unlike std::uniform_int_distribution.
@@ -59,10 +62,10 @@ int TileBlockStatistics::AddTile() {
   return tiles() - 1;
 }
 
-void TileBlockStatistics::AddPixel(int tile, double t0, double r0, const float* st, const float* sr, const float* qt,
-                                   const float* qr, const float* qe, const float* sq, double flicker_power,
+void TileBlockStatistics::AddPixel(int tile, double t0, double r0, const float* sums, double flicker_power,
                                    double flicker_segments) {
   const int k_count = blocks();
+  auto in = [&](CellSum kind, int k) { return double(sums[kind * k_count + k]); };
   double* row = rows_.data() + static_cast<size_t>(tile) * stride_;
   row[kPixels] += 1;
   row[kFlickerPower] += flicker_power;
@@ -72,20 +75,26 @@ void TileBlockStatistics::AddPixel(int tile, double t0, double r0, const float* 
   // The pixel's temporal means (shifted) over the whole sequence: each
   // block's squared deviations are taken from them, so that a variance is a
   // sum over blocks (the linearised statistic the bootstrap resamples).
-  double frames = 0, mean_t = 0, mean_r = 0;
-  for (int k = 0; k < k_count; ++k) frames += block_frames_[k], mean_t += st[k], mean_r += sr[k];
+  double frames = 0, mean_t = 0, mean_r = 0, weight = 0, weighted_e = 0;
+  for (int k = 0; k < k_count; ++k) {
+    frames += block_frames_[k], mean_t += in(kSumT, k), mean_r += in(kSumR, k);
+    weight += in(kWeight, k), weighted_e += in(kWeightedE, k);
+  }
   mean_t /= frames;
   mean_r /= frames;
   const double mean_e = mean_t - mean_r;
+  const double mean_we = weight > 0 ? weighted_e / weight : 0.0;  // the relMSE-weighted mean of E - e0
   double* per_block = row + kScalars;
   for (int k = 0; k < k_count; ++k) {
-    const double n = block_frames_[k], se = double(st[k]) - sr[k];
-    per_block[kST * k_count + k] += st[k];
-    per_block[kSR * k_count + k] += sr[k];
-    per_block[kDT * k_count + k] += qt[k] - 2 * mean_t * st[k] + n * mean_t * mean_t;
-    per_block[kDR * k_count + k] += qr[k] - 2 * mean_r * sr[k] + n * mean_r * mean_r;
-    per_block[kDE * k_count + k] += qe[k] - 2 * mean_e * se + n * mean_e * mean_e;
-    per_block[kSQ * k_count + k] += sq[k];
+    const double n = block_frames_[k], st = in(kSumT, k), sr = in(kSumR, k), se = st - sr;
+    per_block[kST * k_count + k] += st;
+    per_block[kSR * k_count + k] += sr;
+    per_block[kDT * k_count + k] += in(kSquareT, k) - 2 * mean_t * st + n * mean_t * mean_t;
+    per_block[kDR * k_count + k] += in(kSquareR, k) - 2 * mean_r * sr + n * mean_r * mean_r;
+    per_block[kDE * k_count + k] += in(kSquareE, k) - 2 * mean_e * se + n * mean_e * mean_e;
+    per_block[kSQ * k_count + k] += in(kRelative, k);
+    per_block[kDQ * k_count + k] +=
+        in(kWeightedE2, k) - 2 * mean_we * in(kWeightedE, k) + mean_we * mean_we * in(kWeight, k);
   }
 }
 
@@ -117,6 +126,8 @@ TileBlockStatistics::Estimates TileBlockStatistics::FromSums(const double* row,
   const double sum_test = linear(kST) + frames * row[kT0], sum_ref = linear(kSR) + frames * row[kR0];
   if (sum_ref != 0) e.energy_bias = (sum_test - sum_ref) / sum_ref;
   e.relmse = pixels > 0 && frames > 0 ? linear(kSQ) / (frames * pixels) : 0.0;
+  e.relmse_temporal = pixels > 0 && frames > 0 ? linear(kDQ) / (frames * pixels) : 0.0;
+  e.relmse_spatial = e.relmse - e.relmse_temporal;
   e.flicker_index = row[kFlickerSegments] > 0 ? row[kFlickerPower] / row[kFlickerSegments] : 0.0;
   return e;
 }
@@ -225,6 +236,10 @@ TileBlockStatistics::Intervals TileBlockStatistics::Bootstrap(const Estimates& p
       point.energy_bias, [](const Estimates& e) { return e.energy_bias; }, true);
   out.relmse = interval(
       point.relmse, [](const Estimates& e) { return std::optional(e.relmse); }, true);
+  out.relmse_temporal = interval(
+      point.relmse_temporal, [](const Estimates& e) { return std::optional(e.relmse_temporal); }, true);
+  out.relmse_spatial = interval(
+      point.relmse_spatial, [](const Estimates& e) { return std::optional(e.relmse_spatial); }, true);
   // The spectrum needs the frames in order: only tiles are resampled for it.
   out.flicker_index = interval(
       point.flicker_index, [](const Estimates& e) { return std::optional(e.flicker_index); }, false);

@@ -16,9 +16,8 @@ namespace {
 // Rousselle et al. 2011, with 0.01 as docs/metrics.md defines it).
 using detail::kRelMseEpsilon;
 
-// Per (frame block, region pixel): sum (T - t0), sum (R - r0), the squares of
-// those and of (E - e0), and sum E^2 / (R^2 + eps).
-constexpr int kCellSums = 6;
+// Per (frame block, region pixel): the sums TileBlockStatistics::CellSum names.
+constexpr int kCellSums = TileBlockStatistics::kCellSums;
 
 // The two-sided 95 % normal quantile, for the reference noise's share of an interval.
 constexpr double kZ95 = 1.959963984540054;
@@ -78,9 +77,11 @@ MetricsAccumulator::MetricsAccumulator(const AccumulatorSetup& setup)
       block_frames_.push_back(std::min(block_length_, setup.frames - t));
     cells_.assign(block_frames_.size() * region_indices_.size() * kCellSums, 0.f);
     shifts_.assign(2 * region_indices_.size(), 0.f);
+    joint_.assign(3 * region_indices_.size(), 0.0);
     if (setup.reference_stderr) {
       noise_.assign(region_indices_.size(), 0.0);
       relmse_noise_.assign(region_indices_.size(), 0.0);
+      weighted_noise_.assign(region_indices_.size(), 0.0);
     }
     // The flicker weights of FlickerIndex, per bin, for the per-tile spectra.
     std::vector<double> freq = WelchFrequencies(setup.segment_length, setup.fps), weights;
@@ -180,16 +181,24 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
         }
         const double dt = tv - shifts_[2 * p], dr = rv - shifts_[2 * p + 1], de = dt - dr;
         const double denominator = rv * rv + kRelMseEpsilon;
+        const double w = 1 / denominator;
+        using S = TileBlockStatistics;
         float* cell = block_cells + static_cast<size_t>(p) * kCellSums;
-        cell[0] += static_cast<float>(dt);
-        cell[1] += static_cast<float>(dr);
-        cell[2] += static_cast<float>(dt * dt);
-        cell[3] += static_cast<float>(dr * dr);
-        cell[4] += static_cast<float>(de * de);
-        cell[5] += static_cast<float>(terms.relative2[x]);  // e^2 / denominator
+        cell[S::kSumT] += static_cast<float>(dt);
+        cell[S::kSumR] += static_cast<float>(dr);
+        cell[S::kSquareT] += static_cast<float>(dt * dt);
+        cell[S::kSquareR] += static_cast<float>(dr * dr);
+        cell[S::kSquareE] += static_cast<float>(de * de);
+        cell[S::kRelative] += static_cast<float>(terms.relative2[x]);  // e^2 / denominator
+        cell[S::kWeight] += static_cast<float>(w);
+        cell[S::kWeightedE] += static_cast<float>(w * de);
+        cell[S::kWeightedE2] += static_cast<float>(w * de * de);
+        double* joint = joint_.data() + 3 * static_cast<size_t>(p);
+        joint[0] += w, joint[1] += w * e, joint[2] += w * e * e;
         if (se_row && std::isfinite(se_row[x])) {
           const double s2 = double(se_row[x]) * se_row[x];
           noise_[p] += s2;
+          weighted_noise_[p] += w * s2;
           // d/dR of E^2 / (R^2 + eps), with E = T - R (the delta method).
           const double slope = -2 * e / denominator - 2 * rv * e * e / (denominator * denominator);
           relmse_noise_[p] += slope * slope * s2;
@@ -237,7 +246,7 @@ void MetricsAccumulator::AddIntervals(MetricsReport* report, const cv::Mat& good
   const std::vector<double>& flicker_power = spectrum_.pixel_weighted_power();
   const std::vector<int>& flicker_segments = spectrum_.pixel_segments();
   std::vector<float> sums(static_cast<size_t>(kCellSums) * blocks);
-  double noise = 0, relmse_noise = 0;
+  double noise = 0, relmse_noise = 0, weighted_noise = 0;
   long long used = 0;
   // Only tiles that intersect the good region, each weighted by its pixels.
   for (int ty = 0; ty < setup_.height; ty += tile)
@@ -251,12 +260,12 @@ void MetricsAccumulator::AddIntervals(MetricsReport* report, const cv::Mat& good
           for (int k = 0; k < blocks; ++k)
             for (int s = 0; s < kCellSums; ++s)
               sums[s * blocks + k] = cells_[(static_cast<size_t>(k) * region_count + p) * kCellSums + s];
-          cells.AddPixel(index, shifts_[2 * p], shifts_[2 * p + 1], &sums[0], &sums[blocks], &sums[2 * blocks],
-                         &sums[3 * blocks], &sums[4 * blocks], &sums[5 * blocks], flicker_power[p],
+          cells.AddPixel(index, shifts_[2 * p], shifts_[2 * p + 1], sums.data(), flicker_power[p],
                          flicker_segments[p]);
           if (!noise_.empty()) {
             noise += noise_[p];
             relmse_noise += relmse_noise_[p];
+            weighted_noise += weighted_noise_[p];
           }
           ++used;
         }
@@ -267,10 +276,13 @@ void MetricsAccumulator::AddIntervals(MetricsReport* report, const cv::Mat& good
   point.tv_ratio = report->tv_ratio;
   point.energy_bias = report->energy_bias;
   point.relmse = report->relmse.value_or(0);
+  point.relmse_temporal = report->relmse_temporal.value_or(0);
+  point.relmse_spatial = report->relmse_spatial.value_or(0);
   point.flicker_index = report->flicker.flicker_index;
   TileBlockStatistics::Intervals ci = cells.Bootstrap(point, setup_.bootstrap);
   if (!report->tv_err) ci.tv_err.reset();
   if (!report->relmse) ci.relmse.reset();
+  if (!report->relmse_temporal) ci.relmse_temporal.reset(), ci.relmse_spatial.reset();
   report->bootstrap = MetricsReport::Bootstrap{setup_.bootstrap.replicates, block_length_, tile, setup_.bootstrap.seed};
 
   if (!noise_.empty() && stderr_frames_ == frames_added_ && used > 0) {
@@ -293,7 +305,16 @@ void MetricsAccumulator::AddIntervals(MetricsReport* report, const cv::Mat& good
     if (ci.energy_bias && reference_sum != 0)
       widen(ci.energy_bias, *report->energy_bias,
             std::abs((1 + *report->energy_bias) / reference_sum) * std::sqrt(noise));
-    if (ci.relmse) widen(ci.relmse, *report->relmse, std::sqrt(relmse_noise) / (used * frames));
+    const double relmse_sigma = std::sqrt(relmse_noise) / (used * frames);
+    if (ci.relmse) widen(ci.relmse, *report->relmse, relmse_sigma);
+    // The parts: the noise of their sum bounds each one's (to first order),
+    // and independent reference noise adds mean(w s^2) to the temporal
+    // part, as F adds to tv_err.
+    if (ci.relmse_temporal) {
+      widen(ci.relmse_temporal, *report->relmse_temporal, relmse_sigma);
+      ci.relmse_temporal->lo = std::max(0.0, ci.relmse_temporal->lo - weighted_noise / (used * frames));
+    }
+    if (ci.relmse_spatial) widen(ci.relmse_spatial, *report->relmse_spatial, relmse_sigma);
     if (ci.flicker_index && setup_.signal == FlickerSignal::kError) {
       // White noise of variance `floor` in E: its Welch density is flat, 2 floor / fs one-sided.
       const FlickerResult& f = report->flicker;
@@ -353,6 +374,22 @@ Status MetricsAccumulator::Finish(MetricsReport* report) {
       for (double r : rmse_per_frame_) rmse += r;
       report->rmse = rmse / rmse_per_frame_.size();
       report->relmse = relmse_sum_ / rmse_per_frame_.size();
+      // The split over the good pixels, each pixel's mean error weighted as
+      // its samples are: sum_t w (E - m)^2 + m^2 sum_t w = sum_t w E^2 with
+      // m = sum_t w E / sum_t w, so the parts add up to relmse exactly (when
+      // no sample was non-finite; else to relmse over the good pixels).
+      double temporal = 0, spatial = 0;
+      for (size_t p = 0; p < region_indices_.size(); ++p) {
+        const int i = region_indices_[p];
+        if (!good.at<uint8_t>(i / setup_.width, i % setup_.width)) continue;
+        const double* joint = joint_.data() + 3 * p;
+        if (!(joint[0] > 0)) continue;
+        const double mean_part = joint[1] * joint[1] / joint[0];
+        spatial += mean_part;
+        temporal += std::max(0.0, joint[2] - mean_part);
+      }
+      report->relmse_temporal = temporal / (double(used) * frames);
+      report->relmse_spatial = spatial / (double(used) * frames);
     }
     if (!report->tv_ratio)
       report->warnings.push_back("tv_ratio is undefined: the reference has zero temporal variance");

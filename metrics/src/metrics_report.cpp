@@ -217,6 +217,8 @@ nlohmann::json ToJson(const MetricsReport& r) {
     j["temporal_diff_err"] = optional(r.temporal_diff_err);
     j["rmse"] = optional(r.rmse);
     j["relmse"] = optional(r.relmse);
+    j["relmse_temporal"] = optional(r.relmse_temporal);
+    j["relmse_spatial"] = optional(r.relmse_spatial);
   }
   if (r.ci95) {
     auto interval = [](const std::optional<Interval>& i) { return i ? json::array({i->lo, i->hi}) : json(nullptr); };
@@ -224,6 +226,8 @@ nlohmann::json ToJson(const MetricsReport& r) {
                  {"tv_ratio", interval(r.ci95->tv_ratio)},
                  {"energy_bias", interval(r.ci95->energy_bias)},
                  {"relmse", interval(r.ci95->relmse)},
+                 {"relmse_temporal", interval(r.ci95->relmse_temporal)},
+                 {"relmse_spatial", interval(r.ci95->relmse_spatial)},
                  {"flicker_index", interval(r.ci95->flicker_index)}};
   }
   if (r.bootstrap)

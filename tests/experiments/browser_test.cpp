@@ -73,7 +73,7 @@ TEST(Browser, ReportHtmlRendersEverySectionWithoutErrors) {
   ASSERT_EQ(std::system(dom_cmd.c_str()), 0) << dom_cmd << "\n" << ReadText(dir / "log.txt");
   const std::string dom = ReadText(dir / "dom.html");
   for (const char* section :
-       {report::kOverviewHeading, report::kLeaderboardHeading, report::kHeatmapHeading, report::kRecommendationsHeading,
+       {report::kAnswerHeading, report::kOverviewHeading, report::kCellsHeading, report::kLeaderboardHeading, report::kHeatmapHeading,
         report::kExcludedHeading, report::kShotsHeading, report::kMethodHeading})
     EXPECT_NE(dom.find(">" + std::string(section) + "</h"), std::string::npos) << section;
   EXPECT_NE(dom.find("sphere / ggx:0.3 / orbit"), std::string::npos);  // the unconverged shot, listed

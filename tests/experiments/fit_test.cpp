@@ -177,7 +177,7 @@ TEST(FitJson, JointFitsReadBackAsWritten) {
   const auto rows = EngineSettingRows(*read);
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].fitted, "roughness_limiter_amount = 0.2076, roughness_limiter_limit = 0.9048");
-  EXPECT_EQ(rows[0].held_out, "within intervals");
+  EXPECT_EQ(rows[0].held_out, "tied (intervals overlap)");
 }
 
 TEST(FitJson, BadFilesGetOneErrorNamingThem) {

@@ -274,7 +274,7 @@ TEST(SgAccuracyReport, StoreWithSgShotsHasTheSectionAfterTheOverview) {
   ASSERT_TRUE(WriteReport(rows, "t", (dir.path() / "rep").string(), &warnings));
   const std::string md = ReadText(dir.path() / "rep" / "report.md");
   const auto overview = md.find("## Overview"), section = md.find("## SG lighting: accuracy of seed 004's approxim"),
-             recommendations = md.find("### Recommendations"), shots = md.find("\n## Shots\n");
+             recommendations = md.find("### Cells in detail"), shots = md.find("\n## Shots\n");
   ASSERT_NE(section, std::string::npos) << md;
   EXPECT_LT(overview, section);
   EXPECT_LT(recommendations, section);

@@ -155,28 +155,41 @@ TEST(MetricsIntervals, SufficientStatisticsReproduceThePassMetrics) {
   std::vector<std::vector<double>> test(2), ref(2);
   for (int p = 0; p < 2; ++p)
     for (int t = 0; t < 8; ++t) test[p].push_back(u(random)), ref[p].push_back(u(random));
-  double sum_t = 0, sum_r = 0, tv_err = 0, tv_test = 0, rel = 0;
+  double sum_t = 0, sum_r = 0, tv_err = 0, tv_test = 0, rel = 0, rel_temporal = 0;
   for (int p = 0; p < 2; ++p) {
-    std::vector<float> st(3, 0), sr(3, 0), qt(3, 0), qr(3, 0), qe(3, 0), sq(3, 0);
-    double mt = 0, me = 0;
+    using S = TileBlockStatistics;
+    std::vector<float> sums(S::kCellSums * 3, 0.f);
+    auto at = [&](S::CellSum kind, int k) -> float& { return sums[kind * 3 + k]; };
+    double mt = 0, me = 0, sw = 0, swe = 0;
     for (int t = 0; t < 8; ++t) mt += test[p][t] / 8, me += (test[p][t] - ref[p][t]) / 8;
+    for (int t = 0; t < 8; ++t) {
+      const double w = 1 / (ref[p][t] * ref[p][t] + 0.01);
+      sw += w, swe += w * (test[p][t] - ref[p][t]);
+    }
+    for (int t = 0; t < 8; ++t) {
+      const double w = 1 / (ref[p][t] * ref[p][t] + 0.01), d = test[p][t] - ref[p][t] - swe / sw;
+      rel_temporal += w * d * d / 16;
+    }
     for (int t = 0; t < 8; ++t) {
       const int k = t / 3;
       const double dt = test[p][t] - test[p][0], dr = ref[p][t] - ref[p][0], e = test[p][t] - ref[p][t];
-      st[k] += dt, sr[k] += dr, qt[k] += dt * dt, qr[k] += dr * dr, qe[k] += (dt - dr) * (dt - dr);
-      sq[k] += e * e / (ref[p][t] * ref[p][t] + 0.01);
+      const double w = 1 / (ref[p][t] * ref[p][t] + 0.01), de = dt - dr;
+      at(S::kSumT, k) += dt, at(S::kSumR, k) += dr, at(S::kSquareT, k) += dt * dt, at(S::kSquareR, k) += dr * dr;
+      at(S::kSquareE, k) += de * de, at(S::kRelative, k) += e * e * w;
+      at(S::kWeight, k) += w, at(S::kWeightedE, k) += w * de, at(S::kWeightedE2, k) += w * de * de;
       sum_t += test[p][t], sum_r += ref[p][t], rel += e * e / (ref[p][t] * ref[p][t] + 0.01) / 16;
       tv_test += (test[p][t] - mt) * (test[p][t] - mt) / 14;
       tv_err += (e - me) * (e - me) / 14;
     }
-    cells.AddPixel(cells.AddTile(), test[p][0], ref[p][0], st.data(), sr.data(), qt.data(), qr.data(), qe.data(),
-                   sq.data(), 0.5, 1);
+    cells.AddPixel(cells.AddTile(), test[p][0], ref[p][0], sums.data(), 0.5, 1);
   }
   const TileBlockStatistics::Estimates e = cells.Evaluate({}, {});
   EXPECT_NEAR(e.tv_test, tv_test, 1e-5 * tv_test);
   EXPECT_NEAR(e.tv_err, tv_err, 1e-5 * tv_err);
   EXPECT_NEAR(*e.energy_bias, (sum_t - sum_r) / sum_r, 1e-6);
   EXPECT_NEAR(e.relmse, rel, 1e-5 * rel);
+  EXPECT_NEAR(e.relmse_temporal, rel_temporal, 1e-5 * rel);
+  EXPECT_NEAR(e.relmse_spatial, rel - rel_temporal, 1e-5 * rel);
   EXPECT_DOUBLE_EQ(e.flicker_index, 0.5);
   // Tile 0 twice and tile 1 not at all, blocks as they are: tile 0's numbers.
   const TileBlockStatistics::Estimates only0 = cells.Evaluate({2, 0}, {});
@@ -194,14 +207,12 @@ TEST(MetricsIntervals, BootstrapGivesTheSameIntervalsOnAnyNumberOfThreads) {
   TileBlockStatistics cells(blocks);
   std::mt19937 random(11);
   std::uniform_real_distribution<float> u(0.f, 1.f);
-  std::vector<float> sums(6 * blocks.size());
+  std::vector<float> sums(TileBlockStatistics::kCellSums * blocks.size());
   for (int tile = 0; tile < 1237; ++tile) {
     const int index = cells.AddTile();
     for (int pixel = 0; pixel < 3; ++pixel) {
       for (float& v : sums) v = u(random);
-      const size_t k = blocks.size();
-      cells.AddPixel(index, u(random), 1 + u(random), &sums[0], &sums[k], &sums[2 * k], &sums[3 * k], &sums[4 * k],
-                     &sums[5 * k], u(random), 1);
+      cells.AddPixel(index, u(random), 1 + u(random), sums.data(), u(random), 1);
     }
   }
   const TileBlockStatistics::Estimates point = cells.Evaluate({}, {});
@@ -216,6 +227,7 @@ TEST(MetricsIntervals, BootstrapGivesTheSameIntervalsOnAnyNumberOfThreads) {
   for (const auto& run : runs) {
     for (auto member : {&TileBlockStatistics::Intervals::tv_err, &TileBlockStatistics::Intervals::tv_ratio,
                         &TileBlockStatistics::Intervals::energy_bias, &TileBlockStatistics::Intervals::relmse,
+                        &TileBlockStatistics::Intervals::relmse_temporal,
                         &TileBlockStatistics::Intervals::flicker_index}) {
       ASSERT_TRUE(run.*member && runs[0].*member);
       EXPECT_EQ((run.*member)->lo, (runs[0].*member)->lo);
@@ -255,7 +267,8 @@ TEST(MetricsIntervals, TvErrFloorRecoversTheReferenceNoiseShareFromStderrY) {
   EXPECT_LE(with->ci95->tv_err->lo, *with->tv_err - s * s + 1e-9);
   const nlohmann::json j = ToJson(*with);
   EXPECT_TRUE(j.contains("tv_err_floor"));
-  for (const char* key : {"tv_err", "tv_ratio", "energy_bias", "relmse", "flicker_index"}) {
+  for (const char* key :
+       {"tv_err", "tv_ratio", "energy_bias", "relmse", "relmse_temporal", "relmse_spatial", "flicker_index"}) {
     ASSERT_TRUE(j["ci95"].contains(key)) << key;
     ASSERT_EQ(j["ci95"][key].size(), 2u) << key;
     EXPECT_LE(j["ci95"][key][0].get<double>(), j["ci95"][key][1].get<double>()) << key;

@@ -102,6 +102,75 @@ TEST(MetricsReport, ConstantMultiplicativeBiasIsExact) {
   EXPECT_NEAR(*r.tv_ratio, gain * gain, 1e-6);  // variance scales with the square
 }
 
+// relmse's split on sequences whose parts are known in closed form: a static
+// reference R(x, y), and a test R + a(x, y) + b(x, y) s_t with s_t = ±1
+// alternating (mean 0 over the even frame count). Each pixel's weight
+// w = 1 / (R^2 + 0.01) is constant in time, so its weighted mean error is a
+// and the parts are mean(w a^2) (spatial) and mean(w b^2) (temporal).
+TEST(MetricsReport, JointErrorSplitsIntoKnownTemporalAndSpatialParts) {
+  TempDir dir;
+  auto ref = [](int, int x, int y) { return 0.25f + 0.03125f * ((x + 2 * y) % 8); };
+  auto offset = [](int x, int y) { return 0.0625f * ((x * y) % 3); };  // spatial error
+  auto swing = [](int x, int y) { return 0.03125f * ((x + y) % 4); };  // temporal error
+  WriteSequence(dir / "ref", Spec(8, ref));
+  WriteSequence(dir / "test", Spec(8, [&](int t, int x, int y) {
+                  return ref(t, x, y) + offset(x, y) + (t % 2 ? -1.f : 1.f) * swing(x, y);
+                }));
+  double spatial = 0, temporal = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const double r = ref(0, x, y), w = 1 / (r * r + 0.01), a = offset(x, y), b = swing(x, y);
+      spatial += w * a * a / 1024, temporal += w * b * b / 1024;
+    }
+  MetricsReport r = Measure({.test = dir / "test", .reference = dir / "ref"});
+  ASSERT_TRUE(r.relmse_temporal && r.relmse_spatial && r.relmse);
+  EXPECT_NEAR(*r.relmse_spatial, spatial, 1e-6 * spatial);
+  EXPECT_NEAR(*r.relmse_temporal, temporal, 1e-6 * temporal);
+  EXPECT_NEAR(*r.relmse_temporal + *r.relmse_spatial, *r.relmse, 1e-12 * *r.relmse);
+  ASSERT_TRUE(r.ci95 && r.ci95->relmse_temporal && r.ci95->relmse_spatial);
+  EXPECT_LE(r.ci95->relmse_temporal->lo, *r.relmse_temporal);
+  EXPECT_GE(r.ci95->relmse_temporal->hi, *r.relmse_temporal);
+  EXPECT_LE(r.ci95->relmse_spatial->lo, *r.relmse_spatial);
+  EXPECT_GE(r.ci95->relmse_spatial->hi, *r.relmse_spatial);
+}
+
+// A pure offset has no temporal part, a pure zero-mean swing no spatial
+// part; with a reference that moves, each pixel's mean error is weighted
+// as its samples are, and the parts still add up to relmse.
+TEST(MetricsReport, JointErrorOfAnOffsetIsAllSpatialAndOfASwingAllTemporal) {
+  TempDir dir;
+  auto ref = [](int, int x, int y) { return 0.5f + 0.0625f * ((x + y) % 4); };
+  WriteSequence(dir / "ref", Spec(8, ref));
+  WriteSequence(dir / "offset", Spec(8, [&](int t, int x, int y) { return ref(t, x, y) + 0.125f; }));
+  WriteSequence(dir / "swing", Spec(8, [&](int t, int x, int y) { return ref(t, x, y) + (t % 2 ? -0.125f : 0.125f); }));
+  const MetricsReport offset = Measure({.test = dir / "offset", .reference = dir / "ref"});
+  EXPECT_NEAR(*offset.relmse_spatial, *offset.relmse, 1e-9 * *offset.relmse);
+  EXPECT_NEAR(*offset.relmse_temporal, 0.0, 1e-12);
+  const MetricsReport swing = Measure({.test = dir / "swing", .reference = dir / "ref"});
+  EXPECT_NEAR(*swing.relmse_temporal, *swing.relmse, 1e-9 * *swing.relmse);
+  EXPECT_NEAR(*swing.relmse_spatial, 0.0, 1e-12);
+
+  auto moving = [](int t, int x, int y) { return 0.3f + 0.05f * ((t + x + y) % 5); };
+  auto test = [&](int t, int x, int y) { return moving(t, x, y) * 1.2f + 0.02f * (t % 3); };
+  WriteSequence(dir / "moving", Spec(9, moving));
+  WriteSequence(dir / "test", Spec(9, test));
+  const MetricsReport r = Measure({.test = dir / "test", .reference = dir / "moving"});
+  double expected_temporal = 0, expected_spatial = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      double sw = 0, swe = 0, swe2 = 0;
+      for (int t = 0; t < 9; ++t) {
+        const double rv = moving(t, x, y), e = double(test(t, x, y)) - rv, w = 1 / (rv * rv + 0.01);
+        sw += w, swe += w * e, swe2 += w * e * e;
+      }
+      expected_spatial += swe * swe / sw / (9 * 1024);
+      expected_temporal += (swe2 - swe * swe / sw) / (9 * 1024);
+    }
+  EXPECT_NEAR(*r.relmse_spatial, expected_spatial, 1e-6 * expected_spatial);
+  EXPECT_NEAR(*r.relmse_temporal, expected_temporal, 1e-6 * expected_temporal);
+  EXPECT_NEAR(*r.relmse_temporal + *r.relmse_spatial, *r.relmse, 1e-12 * *r.relmse);
+}
+
 TEST(MetricsReport, WhiteNoiseHasFlatSpectrumAtItsVariance) {
   const double sigma = 0.1, fs = 60;
   const int frames = 64, length = 16;

@@ -36,25 +36,40 @@ class TileBlockStatistics {
 
   // Starts a tile's row (all zeros); returns its index.
   int AddTile();
-  // One pixel: its first-frame values t0, r0; per block k the shifted sums
-  // st[k] = sum (T - t0), sr[k] = sum (R - r0), the shifted squares qt, qr,
-  // qe (E - e0 with e0 = t0 - r0), and sq[k] = sum E^2 / (R^2 + eps).
-  // `flicker_power` and `flicker_segments`: the pixel's Watson-weighted
-  // spectral power summed over its segments, and their count.
-  void AddPixel(int tile, double t0, double r0, const float* st, const float* sr, const float* qt, const float* qr,
-                const float* qe, const float* sq, double flicker_power, double flicker_segments);
+  // What a pixel brings per frame block, kind-major: sums[kind * blocks() + k].
+  // Values are shifted by the pixel's first frame (t0, r0, e0 = t0 - r0);
+  // w = 1 / (R^2 + eps) is the relMSE weight of each sample.
+  enum CellSum {
+    kSumT,        // sum (T - t0)
+    kSumR,        // sum (R - r0)
+    kSquareT,     // sum (T - t0)^2
+    kSquareR,     // sum (R - r0)^2
+    kSquareE,     // sum (E - e0)^2
+    kRelative,    // sum w E^2
+    kWeight,      // sum w
+    kWeightedE,   // sum w (E - e0)
+    kWeightedE2,  // sum w (E - e0)^2
+    kCellSums
+  };
+  // One pixel: its first-frame values t0, r0, its per-block sums, and
+  // `flicker_power` and `flicker_segments`: its Watson-weighted spectral
+  // power summed over its segments, and their count.
+  void AddPixel(int tile, double t0, double r0, const float* sums, double flicker_power, double flicker_segments);
 
   struct Estimates {
     double tv_test = 0, tv_ref = 0, tv_err = 0;
     std::optional<double> tv_ratio, energy_bias;
     double relmse = 0, flicker_index = 0;
+    // relmse's split (docs/metrics.md, "Joint error"): the weighted variance
+    // of E about each pixel's weighted temporal mean, and the rest.
+    double relmse_temporal = 0, relmse_spatial = 0;
   };
   // The metrics of the data set made of tile i taken w[i] times and frame
   // block k taken c[k] times (empty w or c: each once).
   Estimates Evaluate(const std::vector<int>& tile_counts, const std::vector<int>& block_counts) const;
 
   struct Intervals {
-    std::optional<Interval> tv_err, tv_ratio, energy_bias, relmse, flicker_index;
+    std::optional<Interval> tv_err, tv_ratio, energy_bias, relmse, relmse_temporal, relmse_spatial, flicker_index;
   };
   // The 95 % intervals about `point` (the metrics as computed by the pass).
   Intervals Bootstrap(const Estimates& point, const BootstrapSettings& settings) const;

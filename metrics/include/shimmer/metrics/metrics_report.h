@@ -66,6 +66,10 @@ struct MetricsReport {
 
   double tv_test = 0;
   std::optional<double> tv_ref, tv_err, tv_ratio, energy_bias, temporal_diff_err, rmse, relmse;
+  // relmse, the joint error, split (docs/metrics.md, "Joint error"): the
+  // temporal part (each pixel's weighted variance of E about its weighted
+  // temporal mean) and the spatial part (that mean's error); they add up to relmse.
+  std::optional<double> relmse_temporal, relmse_spatial;
   std::vector<double> energy_bias_per_frame, rmse_per_frame;  // with a reference
   double temporal_diff_test = 0;                              // mean over t >= 1 and M of |T_t - T_{t-1}|
   std::optional<double> warp_err;                             // when the test frames carry motion.X/Y

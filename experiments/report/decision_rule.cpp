@@ -1,0 +1,216 @@
+#include "decision_rule.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "shimmer/experiments/output_files.h"
+
+namespace shimmer::experiments::report {
+
+namespace {
+
+bool Meets(const Interval& energy, double point) {
+  if (energy.Known()) return energy.lo <= kEnergyTolerance && energy.hi >= -kEnergyTolerance;
+  return std::abs(point) <= kEnergyTolerance;
+}
+
+bool Near(double value, double baseline) {
+  if (std::isnan(value) || std::isnan(baseline)) return false;
+  if (baseline == 0) return value == 0;
+  return std::abs(value / baseline - 1) <= kNilEffect;
+}
+
+const std::vector<std::string> kRows = {"small curved", "thin", "flat with normal detail", "other",
+                                        "normal-mapped", "SG-lit",       "glints"};
+const std::vector<std::string> kBands = {"α ≤ 0.02", "0.02 < α ≤ 0.1", "0.1 < α ≤ 0.3", "α > 0.3", "α unknown"};
+
+}  // namespace
+
+Evidence EvidenceOf(const JobResult& row) {
+  Evidence e;
+  e.tv_err = Metric(row.metrics, "tv_err");
+  e.joint = Metric(row.metrics, "relmse");
+  e.energy_bias = Metric(row.metrics, "energy_bias");
+  e.noise_share = Metric(row.metrics, "tv_err_floor");
+  e.tv_err_ci = Ci95(row, "tv_err");
+  e.joint_ci = Ci95(row, "relmse");
+  e.energy_ci = Ci95(row, "energy_bias");
+  e.spatial = Metric(row.metrics, "relmse_spatial");
+  e.spatial_ci = Ci95(row, "relmse_spatial");
+  if (std::isnan(e.spatial)) e.spatial = e.joint, e.spatial_ci = e.joint_ci;
+  return e;
+}
+
+Verdict Separate(Interval a, Interval b) {
+  if (!a.Known() || !b.Known()) return Verdict::kUnknown;
+  if (a.hi < b.lo) return Verdict::kBetter;
+  if (b.hi < a.lo) return Verdict::kWorse;
+  return Verdict::kIndistinguishable;
+}
+
+Outcome Decide(const Evidence& v, const Evidence& none) {
+  if (!v.tv_err_ci.Known() || !none.tv_err_ci.Known()) return Outcome::kUnknown;
+  if (Near(v.tv_err, none.tv_err) && (std::isnan(v.joint) || Near(v.joint, none.joint))) return Outcome::kNoEffect;
+  switch (Separate(v.tv_err_ci, none.tv_err_ci)) {
+    case Verdict::kBetter: {
+      const bool blurrier = v.spatial_ci.Known() && none.spatial_ci.Known() &&
+                            v.spatial_ci.lo > kSpatialTolerance * none.spatial_ci.hi;
+      if (blurrier) return Outcome::kBlurrier;
+      if (!Meets(v.energy_ci, v.energy_bias)) return Outcome::kLosesEnergy;
+      return Outcome::kBetter;
+    }
+    case Verdict::kWorse: return Outcome::kLessSteady;
+    default: break;
+  }
+  if (v.noise_share > kNoiseShareLimit || none.noise_share > kNoiseShareLimit) return Outcome::kUnresolved;
+  return Outcome::kTied;
+}
+
+std::string OutcomeText(Outcome outcome) {
+  switch (outcome) {
+    case Outcome::kBetter: return "**better**";
+    case Outcome::kTied: return "≈ none";
+    case Outcome::kNoEffect: return "no effect";
+    case Outcome::kBlurrier: return "steadier, blurrier";
+    case Outcome::kLosesEnergy: return "steadier, loses energy";
+    case Outcome::kLessSteady: return "less steady";
+    case Outcome::kUnresolved: return "unresolved: reference noise";
+    case Outcome::kBaseline: return "baseline";
+    case Outcome::kUnknown: break;
+  }
+  return "n/a (no intervals)";
+}
+
+std::string DecisionRuleText() {
+  return "A variant is **better** than `none` in a table when (1) it is steadier: its `tv_err` 95 % interval lies "
+         "wholly below `none`'s; (2) it does not blur beyond tolerance: the lower end of its spatial error "
+         "(`relmse_spatial`) interval is at most " +
+         FormatNumber(kSpatialTolerance, "%g") +
+         "× the upper end of `none`'s (else **steadier, blurrier**); and (3) it keeps the highlight: its "
+         "`energy_bias` interval meets ±" +
+         FormatNumber(kEnergyTolerance, "%.2f") +
+         " (else **steadier, loses energy**). A variant within " + FormatNumber(100 * kNilEffect, "%g") +
+         " % of `none` in both `tv_err` and the joint error has **no effect**; one whose interval overlaps "
+         "`none`'s is **≈ none**, or **unresolved: reference noise** when the reference's noise explains over " +
+         FormatNumber(100 * kNoiseShareLimit, "%g") +
+         " % of either row's `tv_err`; one wholly above is **less steady**. A cell's **pick** is, among the "
+         "filters better than `none` in at least " +
+         FormatNumber(100 * kPickShare, "%g") +
+         " % of the cell's tables and of no effect in at most half, the one with the lowest median joint error "
+         "(`relmse`) ratio to `none`; without one the answer is **keep `none`**. `supersample-N` is the "
+         "brute-force baseline (N² shading per pixel) and never a pick. The pick and the runner-up are **tied** "
+         "unless the pick's joint-error interval lies below the runner-up's in at least half of their shared "
+         "tables and above it in none. Two values whose intervals overlap are never ranked.";
+}
+
+std::string CellRowOf(const Group& group) {
+  if (group.material.rfind("glints", 0) == 0) return "glints";
+  if (SgLitScene(group.scene)) return "SG-lit";
+  if (NormalMappedScene(group.scene)) return "normal-mapped";
+  return GeometryClass(group.scene);
+}
+
+const std::vector<std::string>& CellRows() { return kRows; }
+const std::vector<std::string>& RoughnessBands() { return kBands; }
+
+bool CellCandidate::Eligible(int cell_tables) const {
+  return !supersample && cell_tables > 0 && better >= kPickShare * cell_tables && 2 * no_effect <= tables;
+}
+
+std::vector<CellCandidate> Candidates(const std::vector<const Group*>& groups) {
+  std::map<std::string, CellCandidate> by_label;
+  for (const Group* g : groups) {
+    const JobResult* none = NoneOf(*g);
+    if (!none) continue;
+    for (const JobResult* r : g->rows) {
+      if (r == none || r->job.variant == "none") continue;
+      CellCandidate& c = by_label[Label(*r)];
+      c.label = Label(*r);
+      c.supersample = IsSupersample(*r);
+      c.rows.push_back({g, r});
+    }
+  }
+  const int tables = int(groups.size());
+  std::vector<CellCandidate> out;
+  for (auto& [label, c] : by_label) {
+    std::vector<double> joint, tv, bias;
+    std::map<std::string, std::vector<double>> cost;
+    for (const auto& [g, r] : c.rows) {
+      const Evidence e = EvidenceOf(*r), base = EvidenceOf(*NoneOf(*g));
+      ++c.tables;
+      switch (Decide(e, base)) {
+        case Outcome::kBetter: ++c.better; break;
+        case Outcome::kNoEffect: ++c.no_effect; break;
+        case Outcome::kUnresolved: ++c.unresolved; break;
+        default: break;
+      }
+      c.energy_within += Meets(e.energy_ci, e.energy_bias);
+      joint.push_back(base.joint > 0 ? e.joint / base.joint : kNaN);
+      tv.push_back(base.tv_err > 0 ? e.tv_err / base.tv_err : kNaN);
+      bias.push_back(e.energy_bias);
+      if (r->cost) cost[r->cost->device].push_back(r->cost->ratio_to_none);
+    }
+    c.share = tables ? double(c.better) / tables : kNaN;
+    c.joint_ratio = QuartilesOf(joint), c.tv_err_ratio = QuartilesOf(tv), c.energy_bias = QuartilesOf(bias);
+    for (const auto& [device, values] : cost) c.cost[device] = QuartilesOf(values);
+    out.push_back(std::move(c));
+  }
+  auto median_before = [](const Quartiles& a, const Quartiles& b) {
+    if (std::isnan(a.median) != std::isnan(b.median)) return !std::isnan(a.median);
+    return a.median < b.median;
+  };
+  std::sort(out.begin(), out.end(), [&](const CellCandidate& a, const CellCandidate& b) {
+    const bool ea = a.Eligible(tables), eb = b.Eligible(tables);
+    if (ea != eb) return ea;
+    if (ea && a.joint_ratio.median != b.joint_ratio.median) return median_before(a.joint_ratio, b.joint_ratio);
+    if (a.better != b.better) return a.better > b.better;
+    if (a.joint_ratio.median != b.joint_ratio.median) return median_before(a.joint_ratio, b.joint_ratio);
+    return a.label < b.label;
+  });
+  return out;
+}
+
+std::vector<CellAnswer> AnswerCells(const std::vector<const Group*>& groups) {
+  std::map<std::pair<int, int>, std::vector<const Group*>> cells;
+  auto index = [](const std::vector<std::string>& order, const std::string& name) {
+    return int(std::find(order.begin(), order.end(), name) - order.begin());
+  };
+  for (const Group* g : groups)
+    cells[{index(kRows, CellRowOf(*g)), index(kBands, RoughnessClass(g->alpha))}].push_back(g);
+
+  std::vector<CellAnswer> out;
+  for (const auto& [key, members] : cells) {
+    CellAnswer cell;
+    cell.row = kRows[key.first], cell.band = kBands[key.second];
+    cell.tables = int(members.size());
+    std::set<std::string> shots;
+    for (const Group* g : members) shots.insert(g->Shot());
+    cell.shots = int(shots.size());
+    cell.candidates = Candidates(members);
+    const int tables = cell.tables;
+    if (!cell.candidates.empty() && cell.candidates[0].Eligible(tables)) cell.pick = &cell.candidates[0];
+    if (cell.pick && cell.candidates.size() > 1 && cell.candidates[1].Eligible(tables))
+      cell.runner_up = &cell.candidates[1];
+    if (cell.runner_up) {
+      std::map<const Group*, const JobResult*> other;
+      for (const auto& [g, r] : cell.runner_up->rows) other[g] = r;
+      for (const auto& [g, r] : cell.pick->rows) {
+        auto it = other.find(g);
+        if (it == other.end()) continue;
+        switch (Separate(Ci95(*r, "relmse"), Ci95(*it->second, "relmse"))) {
+          case Verdict::kBetter: ++cell.ahead; break;
+          case Verdict::kWorse: ++cell.behind; break;
+          default: ++cell.tied; break;
+        }
+      }
+      const int shared = cell.ahead + cell.behind + cell.tied;
+      cell.pick_ahead = shared > 0 && cell.behind == 0 && 2 * cell.ahead >= shared;
+    }
+    out.push_back(std::move(cell));
+  }
+  return out;
+}
+
+}  // namespace shimmer::experiments::report

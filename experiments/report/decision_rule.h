@@ -1,0 +1,115 @@
+// The one rule by which a report calls a variant better than `none` in a
+// table, two variants tied, and a cell's pick (docs/method.md, "Decision
+// rule"). The overview, every shot's verdict column, the glint part, the
+// engine-settings part and fit.md all decide through this file.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "report_parts.h"
+
+namespace shimmer::experiments::report {
+
+// A filter must keep the highlight: 10 % of its energy is about the step in
+// brightness a viewer notices in a small highlight (luminance Weber
+// fractions are a few per cent on a display), and it is five times the
+// typical width of `none`'s own energy interval in the standard spec
+// (median 0.018), so an interval that misses ±10 % is a real loss.
+constexpr double kEnergyTolerance = 0.10;
+
+// A filter trades flicker for blur. Its spatial error (relmse_spatial, the
+// temporal mean's error) may exceed `none`'s by at most this factor, with
+// intervals, before the trade counts against it: half as large again is
+// visibly softer in a still frame, and the blurs that win on flicker alone
+// in the standard spec are 40-80x `none`'s, far outside it.
+constexpr double kSpatialTolerance = 1.5;
+
+// When the reference's own noise explains more than half of a row's
+// tv_err, the row's tv_err describes the reference rather than the variant:
+// a tie there is "unresolved", not "no difference".
+constexpr double kNoiseShareLimit = 0.5;
+
+// Within 2 % of `none` in both tv_err and the joint error, a variant does
+// not change what is measured (a clamp that never engages, supersample-1):
+// "no effect", never a pick.
+constexpr double kNilEffect = 0.02;
+
+// A pick must be better than `none` in at least this share of its cell's
+// tables: a filter that helps in a minority of cases is not an answer.
+constexpr double kPickShare = 0.5;
+
+// What the rule reads of one row: point values and 95 % intervals of tv_err,
+// the joint error (relmse), its spatial part and the energy bias, and the
+// share of tv_err that the reference's noise explains (tv_err_floor).
+struct Evidence {
+  double tv_err = kNaN, joint = kNaN, spatial = kNaN, energy_bias = kNaN, noise_share = kNaN;
+  Interval tv_err_ci, joint_ci, spatial_ci, energy_ci;
+};
+// From a row's metrics; the spatial part falls back to relmse in stores
+// measured before the split.
+Evidence EvidenceOf(const JobResult& row);
+
+enum class Outcome {
+  kBetter,       // steadier by intervals, no blur beyond kSpatialTolerance, energy within kEnergyTolerance
+  kTied,         // tv_err intervals overlap
+  kNoEffect,     // within kNilEffect of `none` in tv_err and the joint error
+  kBlurrier,     // steadier, but its spatial error's interval lies above kSpatialTolerance x none's
+  kLosesEnergy,  // steadier, but its energy interval misses ±kEnergyTolerance
+  kLessSteady,   // tv_err interval wholly above none's
+  kUnresolved,   // tied where the reference's noise is over kNoiseShareLimit of either row's tv_err
+  kBaseline,     // the row is `none`
+  kUnknown       // an interval is missing
+};
+Outcome Decide(const Evidence& variant, const Evidence& none);
+std::string OutcomeText(Outcome outcome);  // "better", "≈ none", "blurrier", ...
+
+// Two values with intervals, lower is better: kBetter only when a's interval
+// lies wholly below b's, else tied (kIndistinguishable). Every "lower",
+// "wins" or "fitted better" of a report is this test.
+Verdict Separate(Interval a, Interval b);
+
+// The rule in words, for the reports' method sections.
+std::string DecisionRuleText();
+
+// The rows of the answer grid: geometry classes, then normal-mapped, SG-lit
+// and glint materials as their own rows.
+std::string CellRowOf(const Group& group);
+const std::vector<std::string>& CellRows();
+const std::vector<std::string>& RoughnessBands();
+
+// One variant in one cell.
+struct CellCandidate {
+  std::string label;
+  bool supersample = false;
+  int tables = 0;      // the cell's tables it was measured in
+  int better = 0;      // ... and called better than `none` there
+  int no_effect = 0;   // ... and of no effect
+  int unresolved = 0;  // ... and unresolved
+  int energy_within = 0;  // ... with its energy interval meeting ±kEnergyTolerance
+  double share = kNaN;  // better / the tables of the set it was ranked in
+  Quartiles joint_ratio, tv_err_ratio, energy_bias;  // over the tables, ratios to `none`
+  std::map<std::string, Quartiles> cost;  // benchmark ratio_to_none by device, never mixed
+  std::vector<std::pair<const Group*, const JobResult*>> rows;
+  bool Eligible(int cell_tables) const;
+};
+
+// The variants of a set of tables (not `none`), each decided against its
+// table's `none`: eligible for a pick first, by median joint-error ratio;
+// then by how often better.
+std::vector<CellCandidate> Candidates(const std::vector<const Group*>& groups);
+
+struct CellAnswer {
+  std::string row, band;  // CellRows() x RoughnessBands()
+  int tables = 0, shots = 0;
+  std::vector<CellCandidate> candidates;  // eligible first (by median joint ratio), then by share
+  const CellCandidate* pick = nullptr;    // null: keep `none`
+  const CellCandidate* runner_up = nullptr;
+  int ahead = 0, behind = 0, tied = 0;  // pick's joint error against the runner-up's, per shared table
+  bool pick_ahead = false;              // ahead in at least half the shared tables and behind in none
+};
+// Every (row, band) that has tables, in grid order.
+std::vector<CellAnswer> AnswerCells(const std::vector<const Group*>& groups);
+
+}  // namespace shimmer::experiments::report

@@ -40,6 +40,8 @@ Evidence EvidenceOf(const JobResult& row) {
   e.spatial = Metric(row.metrics, "relmse_spatial");
   e.spatial_ci = Ci95(row, "relmse_spatial");
   if (std::isnan(e.spatial)) e.spatial = e.joint, e.spatial_ci = e.joint_ci;
+  if (auto sp = row.metrics.find("sparkles"); sp != row.metrics.end() && sp->is_object())
+    e.sparkle_count_ratio = Metric(*sp, "mean_count_ratio");
   return e;
 }
 
@@ -59,6 +61,9 @@ Outcome Decide(const Evidence& v, const Evidence& none) {
                             v.spatial_ci.lo > kSpatialTolerance * none.spatial_ci.hi;
       if (blurrier) return Outcome::kBlurrier;
       if (!Meets(v.energy_ci, v.energy_bias)) return Outcome::kLosesEnergy;
+      // NaN (no sparkle statistics) passes; a ratio of 0 (no sparkle at all) does not.
+      if (v.sparkle_count_ratio < 1 / kSparkleTolerance || v.sparkle_count_ratio > kSparkleTolerance)
+        return Outcome::kLosesGlints;
       return Outcome::kBetter;
     }
     case Verdict::kWorse: return Outcome::kLessSteady;
@@ -75,6 +80,7 @@ std::string OutcomeText(Outcome outcome) {
     case Outcome::kNoEffect: return "no effect";
     case Outcome::kBlurrier: return "steadier, blurrier";
     case Outcome::kLosesEnergy: return "steadier, loses energy";
+    case Outcome::kLosesGlints: return "steadier, loses the glints";
     case Outcome::kLessSteady: return "less steady";
     case Outcome::kUnresolved: return "unresolved: reference noise";
     case Outcome::kBaseline: return "baseline";
@@ -91,7 +97,9 @@ std::string DecisionRuleText() {
          "× the upper end of `none`'s (else **steadier, blurrier**); and (3) it keeps the highlight: its "
          "`energy_bias` interval meets ±" +
          FormatNumber(kEnergyTolerance, "%.2f") +
-         " (else **steadier, loses energy**). A variant within " + FormatNumber(100 * kNilEffect, "%g") +
+         " (else **steadier, loses energy**); on a glint material (4) it shows between 1/" +
+         FormatNumber(kSparkleTolerance, "%g") + " and " + FormatNumber(kSparkleTolerance, "%g") +
+         "× the reference's sparkles per frame (else **steadier, loses the glints**). A variant within " + FormatNumber(100 * kNilEffect, "%g") +
          " % of `none` in both `tv_err` and the joint error has **no effect**; one whose interval overlaps "
          "`none`'s is **≈ none**, or **unresolved: reference noise** when the reference's noise explains over " +
          FormatNumber(100 * kNoiseShareLimit, "%g") +

@@ -36,6 +36,13 @@ constexpr double kNoiseShareLimit = 0.5;
 // "no effect", never a pick.
 constexpr double kNilEffect = 0.02;
 
+// Glints: a filter that shows fewer than half or more than twice the
+// reference's sparkles per frame changes the material's look (glittering
+// paint reads as satin, or as noise), however steady it is; the sparkle
+// count ratio (docs/metrics.md, "Sparkle statistics") must stay within
+// [1/kSparkleTolerance, kSparkleTolerance].
+constexpr double kSparkleTolerance = 2.0;
+
 // A pick must be better than `none` in at least this share of its cell's
 // tables: a filter that helps in a minority of cases is not an answer.
 constexpr double kPickShare = 0.5;
@@ -45,6 +52,7 @@ constexpr double kPickShare = 0.5;
 // share of tv_err that the reference's noise explains (tv_err_floor).
 struct Evidence {
   double tv_err = kNaN, joint = kNaN, spatial = kNaN, energy_bias = kNaN, noise_share = kNaN;
+  double sparkle_count_ratio = kNaN;  // with sparkle statistics: test's mean count over the reference's
   Interval tv_err_ci, joint_ci, spatial_ci, energy_ci;
 };
 // From a row's metrics; the spatial part falls back to relmse in stores
@@ -57,6 +65,7 @@ enum class Outcome {
   kNoEffect,     // within kNilEffect of `none` in tv_err and the joint error
   kBlurrier,     // steadier, but its spatial error's interval lies above kSpatialTolerance x none's
   kLosesEnergy,  // steadier, but its energy interval misses ±kEnergyTolerance
+  kLosesGlints,  // steadier, but its sparkle count ratio leaves [1/kSparkleTolerance, kSparkleTolerance]
   kLessSteady,   // tv_err interval wholly above none's
   kUnresolved,   // tied where the reference's noise is over kNoiseShareLimit of either row's tv_err
   kBaseline,     // the row is `none`

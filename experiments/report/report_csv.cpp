@@ -27,7 +27,13 @@ std::string Csv(const std::vector<JobResult>& rows) {
   static constexpr const char* kSplit[] = {"relmse_temporal", "relmse_spatial"};
   for (const char* key : kSplit)
     header.insert(header.end(), {std::string(key), std::string(key) + "_lo", std::string(key) + "_hi"});
-  header.insert(header.end(), {"cell_row", "band", "verdict"});
+  header.insert(header.end(), {"cell_row", "band", "verdict", "label", "tables", "sparkle_count_ratio"});
+  // How many of the report's tables a row sits in: `none` and supersample-N
+  // read no derivatives and join each derivative source's table of their shot.
+  std::map<const JobResult*, int> tables;
+  const std::vector<Group> groups = GroupRows(rows);
+  for (const Group& g : groups)
+    for (const JobResult* r : g.rows) ++tables[r];
   CsvTable table(header);
   for (const JobResult& r : rows) {
     const auto& m = r.metrics;
@@ -80,7 +86,8 @@ std::string Csv(const std::vector<JobResult>& rows) {
                                                   : Decide(EvidenceOf(r), EvidenceOf(*none->second));
     std::string verdict = OutcomeText(outcome);
     verdict.erase(std::remove(verdict.begin(), verdict.end(), '*'), verdict.end());
-    fields.insert(fields.end(), {CellRowOf(g), RoughnessClass(g.alpha), verdict});
+    fields.insert(fields.end(), {CellRowOf(g), RoughnessClass(g.alpha), verdict, Label(r), std::to_string(tables[&r]),
+                                 CsvNumber(EvidenceOf(r).sparkle_count_ratio)});
     table.AddRow(fields);
   }
   return table.Text();

@@ -83,6 +83,18 @@ TEST(DecisionRule, AWinnerThatLosesEnergyIsNotBetter) {
   EXPECT_EQ(Decide(Of(dim), Of(kNone)), Outcome::kBetter);
 }
 
+TEST(DecisionRule, AGlintFilterThatRendersNoGlintsIsNotBetter) {
+  RowNumbers smooth;
+  smooth.tv_err = 0.1;
+  JobResult r = Row("glint-plane", "glints:0.3", "orbit", "glints-smooth", smooth);
+  r.metrics["sparkles"] = {{"mean_count_ratio", 0.0}};
+  EXPECT_EQ(Decide(EvidenceOf(r), Of(kNone)), Outcome::kLosesGlints);
+  r.metrics["sparkles"]["mean_count_ratio"] = 2.5;  // glitter where the reference has none
+  EXPECT_EQ(Decide(EvidenceOf(r), Of(kNone)), Outcome::kLosesGlints);
+  r.metrics["sparkles"]["mean_count_ratio"] = 0.8;
+  EXPECT_EQ(Decide(EvidenceOf(r), Of(kNone)), Outcome::kBetter);
+}
+
 TEST(DecisionRule, ATieDominatedByReferenceNoiseIsUnresolved) {
   RowNumbers noisy;
   noisy.tv_err = 0.95, noisy.floor = 0.9;

@@ -1,0 +1,183 @@
+// Every committed report's answer against its own rows: each row's verdict
+// in report.csv is recomputed here from its numbers and its shot's `none`
+// by the decision rule (written out again, independently of
+// decision_rule.cpp), and each cell's pick in cells.csv must be better than
+// `none` in at least half of the cell's tables, have the lowest median joint
+// error among the variants that are, and stand in the report's answer grid.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+using Record = std::map<std::string, std::string>;
+
+// RFC 4180, as CsvTable writes it.
+std::vector<Record> ReadCsv(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  std::vector<std::vector<std::string>> lines(1);
+  std::string field;
+  bool quoted = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') field += '"', ++i;
+      else if (c == '"') quoted = false;
+      else field += c;
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      lines.back().push_back(field), field.clear();
+    } else if (c == '\n') {
+      lines.back().push_back(field), field.clear();
+      lines.emplace_back();
+    } else if (c != '\r') {
+      field += c;
+    }
+  }
+  if (lines.back().empty()) lines.pop_back();
+  std::vector<Record> out;
+  for (std::size_t r = 1; r < lines.size(); ++r) {
+    Record record;
+    for (std::size_t k = 0; k < lines[0].size() && k < lines[r].size(); ++k) record[lines[0][k]] = lines[r][k];
+    out.push_back(std::move(record));
+  }
+  return out;
+}
+
+double Number(const Record& r, const std::string& key) {
+  auto it = r.find(key);
+  if (it == r.end() || it->second.empty()) return std::nan("");
+  return std::stod(it->second);
+}
+
+std::string Shot(const Record& r) { return r.at("scene") + " / " + r.at("material") + " / " + r.at("camera"); }
+
+// The rule of docs (Method, "Decision rule"), from the CSV's columns.
+std::string ExpectedVerdict(const Record& v, const Record& none) {
+  const double tv = Number(v, "tv_err"), tv_n = Number(none, "tv_err");
+  const double joint = Number(v, "relmse"), joint_n = Number(none, "relmse");
+  if (std::isnan(Number(v, "tv_err_lo")) || std::isnan(Number(none, "tv_err_lo"))) return "n/a (no intervals)";
+  auto near = [](double a, double b) { return !std::isnan(a) && !std::isnan(b) && b != 0 && std::abs(a / b - 1) <= 0.02; };
+  if (near(tv, tv_n) && (std::isnan(joint) || near(joint, joint_n))) return "no effect";
+  if (Number(v, "tv_err_hi") < Number(none, "tv_err_lo")) {
+    std::string sp = std::isnan(Number(v, "relmse_spatial_lo")) ? "relmse" : "relmse_spatial";
+    const double lo = Number(v, sp + "_lo"), hi_n = Number(none, sp + "_hi");
+    if (!std::isnan(lo) && !std::isnan(hi_n) && lo > 1.5 * hi_n) return "steadier, blurrier";
+    const double e_lo = Number(v, "energy_bias_lo"), e_hi = Number(v, "energy_bias_hi");
+    const bool keeps = std::isnan(e_lo) ? std::abs(Number(v, "energy_bias")) <= 0.10 : e_lo <= 0.10 && e_hi >= -0.10;
+    if (!keeps) return "steadier, loses energy";
+    const double sparkles = Number(v, "sparkle_count_ratio");
+    if (sparkles < 0.5 || sparkles > 2) return "steadier, loses the glints";
+    return "better";
+  }
+  if (Number(v, "tv_err_lo") > Number(none, "tv_err_hi")) return "less steady";
+  if (Number(v, "tv_err_floor") > 0.5 || Number(none, "tv_err_floor") > 0.5) return "unresolved: reference noise";
+  return "≈ none";
+}
+
+double Median(std::vector<double> v) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return std::isnan(x); }), v.end());
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const double at = 0.5 * double(v.size() - 1);
+  const std::size_t i = std::size_t(at);
+  return i + 1 < v.size() ? v[i] + (at - double(i)) * (v[i + 1] - v[i]) : v[i];
+}
+
+std::vector<fs::path> CommittedReports() {
+  std::vector<fs::path> out;
+  for (const auto& entry : fs::directory_iterator(fs::path(SHIMMER_SOURCE_DIR) / "results"))
+    if (fs::exists(entry.path() / "report.csv")) out.push_back(entry.path());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST(CommittedResults, EveryReportHasItsAnswerAsCsv) {
+  const auto reports = CommittedReports();
+  ASSERT_GE(reports.size(), 7u);
+  for (const fs::path& dir : reports) EXPECT_TRUE(fs::exists(dir / "cells.csv")) << dir;
+}
+
+TEST(CommittedResults, EveryVerdictFollowsTheRuleFromTheRowsNumbers) {
+  for (const fs::path& dir : CommittedReports()) {
+    const std::vector<Record> rows = ReadCsv(dir / "report.csv");
+    ASSERT_FALSE(rows.empty()) << dir;
+    std::map<std::string, const Record*> none_of;
+    for (const Record& r : rows)
+      if (r.at("variant") == "none" && (r.at("label").find("(external)") == std::string::npos || !none_of.count(Shot(r))))
+        none_of[Shot(r)] = &r;
+    int checked = 0;
+    for (const Record& r : rows) {
+      auto none = none_of.find(Shot(r));
+      if (none == none_of.end() || none->second == &r) continue;
+      EXPECT_EQ(r.at("verdict"), ExpectedVerdict(r, *none->second)) << dir.filename() << ": " << Shot(r) << " " << r.at("label");
+      ++checked;
+    }
+    EXPECT_GT(checked, 0) << dir;
+  }
+}
+
+TEST(CommittedResults, EveryPickIsBetterInHalfItsCellAndStandsInTheGrid) {
+  for (const fs::path& dir : CommittedReports()) {
+    const std::vector<Record> rows = ReadCsv(dir / "report.csv");
+    const std::vector<Record> cells = ReadCsv(dir / "cells.csv");
+    std::ifstream md_in(dir / "report.md", std::ios::binary);
+    const std::string md((std::istreambuf_iterator<char>(md_in)), {});
+    ASSERT_FALSE(cells.empty()) << dir;
+    std::map<std::string, double> none_joint;
+    for (const Record& r : rows)
+      if (r.at("variant") == "none" && !none_joint.count(Shot(r))) none_joint[Shot(r)] = Number(r, "relmse");
+    for (const Record& cell : cells) {
+      const int tables = std::stoi(cell.at("tables"));
+      std::map<std::string, int> better, no_effect, measured;
+      std::map<std::string, std::vector<double>> joint;
+      std::set<std::string> supersample;
+      for (const Record& r : rows) {
+        if (r.at("cell_row") != cell.at("row") || r.at("band") != cell.at("band")) continue;
+        if (r.at("reference") == "unconverged" || r.at("variant") == "none") continue;
+        const std::string& label = r.at("label");
+        const int n = std::stoi(r.at("tables"));
+        if (label.rfind("supersample-", 0) == 0) supersample.insert(label);
+        measured[label] += n;
+        if (r.at("verdict") == "better") better[label] += n;
+        if (r.at("verdict") == "no effect") no_effect[label] += n;
+        for (int i = 0; i < n; ++i) joint[label].push_back(Number(r, "relmse") / none_joint[Shot(r)]);
+      }
+      auto eligible = [&](const std::string& label) {
+        return !supersample.count(label) && better[label] >= 0.5 * tables && 2 * no_effect[label] <= measured[label];
+      };
+      const std::string where = dir.filename().string() + ": " + cell.at("row") + ", " + cell.at("band");
+      const std::string& pick = cell.at("pick");
+      std::string grid_line = "| " + cell.at("row") + " |";
+      const std::size_t line = md.find(grid_line);
+      ASSERT_NE(line, std::string::npos) << where;
+      const std::string grid = md.substr(line, md.find('\n', line) - line);
+      if (pick == "none") {
+        for (const auto& [label, count] : better) EXPECT_FALSE(eligible(label)) << where << ": " << label;
+        EXPECT_NE(grid.find("keep `none`"), std::string::npos) << where << "\n" << grid;
+        continue;
+      }
+      EXPECT_TRUE(eligible(pick)) << where << ": " << pick << " better in " << better[pick] << "/" << tables;
+      EXPECT_EQ(better[pick], std::stoi(cell.at("pick_better"))) << where;
+      for (const auto& [label, count] : better) {
+        if (label == pick || !eligible(label)) continue;
+        EXPECT_LE(Median(joint[pick]), Median(joint[label])) << where << ": " << pick << " against " << label;
+      }
+      EXPECT_NE(grid.find("**`" + pick + "`** " + cell.at("pick_better") + "/" + cell.at("tables")), std::string::npos)
+          << where << "\n" << grid;
+    }
+  }
+}
+
+}  // namespace

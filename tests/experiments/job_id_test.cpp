@@ -1,4 +1,4 @@
-// Job ids re-run exactly what a change changes (README, Job
+// Job ids re-run exactly what a change changes (docs/guide.md, Job
 // ids): shader edits through the renderer's source overrides, scene files
 // and normal maps edited on disk, a store from before per-kernel ids. No
 // device: ids come from the kernel's SPIR-V and the bytes it would read.

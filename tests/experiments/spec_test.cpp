@@ -266,13 +266,13 @@ TEST(Spec, BadFitConfigurationsAreRejectedUpFront) {
   EXPECT_NE(e.find("maps: "), std::string::npos) << e;
 }
 
-// The specs the README runs: each parses, and the ones with fits have them.
+// The specs the guide runs: each parses, and the ones with fits have them.
 TEST(Spec, CommittedSpecsParse) {
   int specs = 0;
   for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(SHIMMER_SOURCE_DIR) /
                                                                  "experiments/specs")) {
     if (entry.path().extension() != ".json") continue;
-    // external.json reads frames the README renders first (section 4c).
+    // external.json reads frames the guide renders first (section 4c).
     if (entry.path().stem() == "external" &&
         !std::filesystem::exists(std::filesystem::path(SHIMMER_SOURCE_DIR) / "runs/external-frames/tk19"))
       continue;

@@ -127,7 +127,7 @@ TEST(Oracle, AnalyticDerivativesAgreeWithQuadDifferencesOnSmoothSurface) {
 // shimmer's (det and the quadratic form as sums of squares) against double.
 // On `bumpy-plane`, the grazing scene, h.z stays above 0.3 (|hpp| < 3): the
 // half vector never comes near the horizon where the slope's finite
-// differences explode (README, "Beyond the papers").
+// differences explode (the reports, "Beyond the papers").
 TEST(Oracle, ParallelogramFootprintsOfTheScenesAndTheTextbookForm) {
   const shading::VariantInfo* v = shading::FindVariant("k16-beckmann-parallelogram");
   const float a = 0.01f;

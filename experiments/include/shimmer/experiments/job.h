@@ -78,7 +78,7 @@ Result<render::RenderSettings> RenderSettingsOf(const Job& job);
 // replicates.
 Result<render::RenderSettings> ReferenceSettingsOf(const Job& job);
 
-// What a job's frames and numbers are made of (README, Job
+// What a job's frames and numbers are made of (docs/guide.md, Job
 // ids): the fingerprints of its render and of its reference's render
 // (render::FingerprintRender: the specialized kernel module and the bytes it
 // reads) and the version of the metrics code.

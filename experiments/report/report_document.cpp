@@ -147,7 +147,7 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
   else
     cost = "Cost: each row's ratio to `none` on its own benchmark device (report.csv, column bench_device).";
   doc.Paragraph(reference + " " + cost +
-                " Every column is in report.csv with the rest (region, `tv_err` itself, `tv_ratio`, "
+                " The other columns are in report.csv and, folded under the table, in report.html (region, `tv_err` itself, `tv_ratio`, "
                 "`flicker_index`, `tv_err_floor`, the temporal part of the joint error, ms).");
   doc.Figures({slug + "_pareto_tv_err.svg", slug + "_pareto_relmse.svg", slug + "_spectra.svg"},
               {"speed against tv_err", "speed against relmse", "flicker spectra"});
@@ -179,6 +179,29 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
              "spatial error, ratio to `none` [95 %]", "energy bias, fraction [95 %]", "cost, ratio to `none`",
              "verdict"},
             cells);
+  // Every other column, for report.html (report.csv has them all too).
+  const Costs costs = CostsOf(group);
+  std::vector<std::vector<std::string>> all;
+  for (std::size_t i = 0; i < group.rows.size(); ++i) {
+    const JobResult& r = *group.rows[i];
+    const auto& m = r.metrics;
+    all.push_back({Code(Label(r)), Region(r), WithInterval(Metric(m, "tv_err"), Ci95(r, "tv_err")),
+                   WithInterval(Metric(m, "tv_ratio"), Ci95(r, "tv_ratio")),
+                   WithInterval(Metric(m, "relmse_temporal"), Ci95(r, "relmse_temporal")),
+                   WithInterval(Metric(m, "relmse_spatial"), Ci95(r, "relmse_spatial")),
+                   WithInterval(FlickerIndex(m), Ci95(r, "flicker_index")), Fmt(Metric(m, "temporal_diff_err")),
+                   Fmt(Metric(m, "tv_err_floor"), "%.2f"),
+                   r.cost ? Fmt(r.cost->median_ms, "%.3g") + " (" + Fmt(r.cost->min_ms, "%.3g") + "–" +
+                                Fmt(r.cost->max_ms, "%.3g") + ") on " + r.cost->device
+                          : "n/a",
+                   r.job.external && !(r.gpu_ms_per_frame > 0) ? std::string("n/a") : Fmt(r.gpu_ms_per_frame, "%.2f"),
+                   std::string(costs.front_tv_err[i] ? "●" : "") + " / " + (costs.front_relmse[i] ? "●" : "")});
+  }
+  doc.HtmlOnlyTable({"variant", "region", "tv_err (luminance²) [95 %]", "tv_ratio [95 %]",
+                     "joint error: temporal part [95 %]", "joint error: spatial part [95 %]",
+                     "flicker_index [95 %]", "temporal_diff_err", "tv_err_floor", "bench ms (min–max)",
+                     "render ms", "Pareto tv_err / relmse"},
+                    all);
 }
 
 // Seed 004's approximations measured on their own, beside the shots that use them.
@@ -346,6 +369,10 @@ void Document::Table(std::vector<std::string> header, std::vector<std::vector<st
   Block b;
   b.kind = Block::Kind::kTable, b.header = std::move(header), b.cells = std::move(cells);
   blocks.push_back(std::move(b));
+}
+void Document::HtmlOnlyTable(std::vector<std::string> header, std::vector<std::vector<std::string>> cells) {
+  Table(std::move(header), std::move(cells));
+  blocks.back().html_only = true;
 }
 void Document::Figures(std::vector<std::string> files, std::vector<std::string> captions) {
   Block b;

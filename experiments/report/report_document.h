@@ -28,6 +28,7 @@ struct Block {
   std::vector<std::string> header;  // tables
   std::vector<std::vector<std::string>> cells;
   std::vector<std::string> captions;  // figures: alt text, one per file
+  bool html_only = false;             // a table of every column: report.html shows it folded, report.md leaves it out
 };
 
 struct Document {
@@ -37,6 +38,7 @@ struct Document {
   void Paragraph(const std::string& text);
   void List(std::vector<std::string> items);
   void Table(std::vector<std::string> header, std::vector<std::vector<std::string>> cells);
+  void HtmlOnlyTable(std::vector<std::string> header, std::vector<std::vector<std::string>> cells);
   void Figures(std::vector<std::string> files, std::vector<std::string> captions);
 };
 

@@ -97,6 +97,7 @@ std::string ToHtml(const Document& doc, const std::function<std::optional<std::s
         html << "</ul>\n";
         break;
       case Block::Kind::kTable:
+        if (b.html_only) html << "<details><summary>every column</summary>\n";
         html << "<table>\n<thead><tr>";
         for (const std::string& h : b.header) html << "<th>" << Inline(h) << "</th>";
         html << "</tr></thead>\n<tbody>\n";
@@ -106,6 +107,7 @@ std::string ToHtml(const Document& doc, const std::function<std::optional<std::s
           html << "</tr>\n";
         }
         html << "</tbody>\n</table>\n";
+        if (b.html_only) html << "</details>\n";
         break;
       case Block::Kind::kFigures:
         html << "<div class=\"figures\">\n";

@@ -41,7 +41,9 @@ std::string ToMarkdown(const Document& doc) {
         for (const std::string& item : b.items) md << "- " << item << "\n";
         md << "\n";
         break;
-      case Block::Kind::kTable: md << MarkdownTable(b.header, b.cells) << "\n"; break;
+      case Block::Kind::kTable:
+        if (!b.html_only) md << MarkdownTable(b.header, b.cells) << "\n";
+        break;
       case Block::Kind::kFigures:
         for (std::size_t i = 0; i < b.items.size(); ++i)
           md << (i ? " " : "") << "![" << (i < b.captions.size() ? b.captions[i] : "") << "](" << b.items[i] << ")";

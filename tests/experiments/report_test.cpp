@@ -638,6 +638,9 @@ TEST(Report, HtmlIsSelfContained) {
     EXPECT_NE(html.find(">" + std::string(section) + "</h"), std::string::npos) << section;
     EXPECT_NE(md.find("# " + std::string(section) + "\n"), std::string::npos) << section;
   }
+  EXPECT_NE(html.find("<details><summary>every column</summary>"), std::string::npos);
+  EXPECT_NE(html.find("<th>tv_err_floor</th>"), std::string::npos);
+  EXPECT_EQ(md.find("| tv_err_floor |"), std::string::npos);  // report.md keeps its 7 columns
   EXPECT_NE(html.find("<code>tk21</code>"), std::string::npos);
   if (fs::exists(dir.path() / "rep" / "heatmap.svg")) {  // gnuplot installed: the plots are inlined, not linked
     EXPECT_NE(html.find("<svg"), std::string::npos);

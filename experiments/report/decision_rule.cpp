@@ -40,6 +40,8 @@ Evidence EvidenceOf(const JobResult& row) {
   e.spatial = Metric(row.metrics, "relmse_spatial");
   e.spatial_ci = Ci95(row, "relmse_spatial");
   if (std::isnan(e.spatial)) e.spatial = e.joint, e.spatial_ci = e.joint_ci;
+  const double noise = Metric(row.metrics, "ref_noise"), mean = Metric(row.metrics, "ref_mean");
+  if (noise >= 0 && mean > 0) e.noise_contrast = std::sqrt(noise) / mean;
   if (auto sp = row.metrics.find("sparkles"); sp != row.metrics.end() && sp->is_object())
     e.sparkle_count_ratio = Metric(*sp, "mean_count_ratio");
   return e;
@@ -69,8 +71,16 @@ Outcome Decide(const Evidence& v, const Evidence& none) {
     case Verdict::kWorse: return Outcome::kLessSteady;
     default: break;
   }
-  if (v.noise_share > kNoiseShareLimit || none.noise_share > kNoiseShareLimit) return Outcome::kUnresolved;
+  if ((v.noise_share > kNoiseShareLimit || none.noise_share > kNoiseShareLimit) && !NoiseBelowVisibility(v, none))
+    return Outcome::kUnresolved;
   return Outcome::kTied;
+}
+
+bool NoiseBelowVisibility(const Evidence& v, const Evidence& none) {
+  if (!(v.noise_share > kNoiseShareLimit || none.noise_share > kNoiseShareLimit)) return false;
+  // Both rows share the reference; the larger contrast decides.
+  const double contrast = std::max(v.noise_contrast, none.noise_contrast);
+  return contrast < kVisibleContrast;  // false when either is unknown (NaN)
 }
 
 std::string OutcomeText(Outcome outcome) {
@@ -103,7 +113,9 @@ std::string DecisionRuleText() {
          " % of `none` in both `tv_err` and the joint error has **no effect**; one whose interval overlaps "
          "`none`'s is **≈ none**, or **unresolved: reference noise** when the reference's noise explains over " +
          FormatNumber(100 * kNoiseShareLimit, "%g") +
-         " % of either row's `tv_err`; one wholly above is **less steady**. A cell's **pick** is, among the "
+         " % of either row's `tv_err` and that noise's contrast (√`ref_noise` / `ref_mean`) is not below " +
+         FormatNumber(100 * kVisibleContrast, "%g") +
+         " % (fainter noise hides no visible flicker, and the tie stands); one wholly above is **less steady**. A cell's **pick** is, among the "
          "filters better than `none` in at least " +
          FormatNumber(100 * kPickShare, "%g") +
          " % of the cell's tables and of no effect in at most half, the one with the lowest median joint error "

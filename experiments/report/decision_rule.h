@@ -28,8 +28,21 @@ constexpr double kSpatialTolerance = 1.5;
 
 // When the reference's own noise explains more than half of a row's
 // tv_err, the row's tv_err describes the reference rather than the variant:
-// a tie there is "unresolved", not "no difference".
+// a tie there is "unresolved", not "no difference" ...
 constexpr double kNoiseShareLimit = 0.5;
+
+// ... unless that noise is itself too faint to hide a flicker anyone could
+// see. Its contrast sqrt(F) / mean luminance (F: the variance the
+// reference's noise adds, ref_noise; over the row's region) below 1 % is
+// under the smallest temporal modulation the eye detects at display
+// luminances and the 2-15 Hz a 30-60 fps sequence flickers at (de Lange
+// 1958, Kelly 1961: thresholds of 0.5-2 % Michelson contrast, √2 times an
+// RMS contrast): whatever the reference cannot tell apart there, a viewer
+// cannot either, and the tie is a tie. Rough materials (α 0.5) where
+// nothing flickers are most of these rows: a better reference would only
+// make `none`'s tiny tv_err and its noise smaller together (their share
+// stays ≈ 1).
+constexpr double kVisibleContrast = 0.01;
 
 // Within 2 % of `none` in both tv_err and the joint error, a variant does
 // not change what is measured (a clamp that never engages, supersample-1):
@@ -53,6 +66,7 @@ constexpr double kPickShare = 0.5;
 struct Evidence {
   double tv_err = kNaN, joint = kNaN, spatial = kNaN, energy_bias = kNaN, noise_share = kNaN;
   double sparkle_count_ratio = kNaN;  // with sparkle statistics: test's mean count over the reference's
+  double noise_contrast = kNaN;       // sqrt(ref_noise) / ref_mean; NaN in stores measured before it
   Interval tv_err_ci, joint_ci, spatial_ci, energy_ci;
 };
 // From a row's metrics; the spatial part falls back to relmse in stores
@@ -68,10 +82,15 @@ enum class Outcome {
   kLosesGlints,  // steadier, but its sparkle count ratio leaves [1/kSparkleTolerance, kSparkleTolerance]
   kLessSteady,   // tv_err interval wholly above none's
   kUnresolved,   // tied where the reference's noise is over kNoiseShareLimit of either row's tv_err
+                 // and its contrast is not below kVisibleContrast (or not known)
   kBaseline,     // the row is `none`
   kUnknown       // an interval is missing
 };
 Outcome Decide(const Evidence& variant, const Evidence& none);
+// The reference's noise is a large share of the row's or `none`'s tv_err
+// (kNoiseShareLimit) but too faint to be seen (kVisibleContrast): a tie
+// there is a tie. What the reports count beside the unresolved rows.
+bool NoiseBelowVisibility(const Evidence& variant, const Evidence& none);
 std::string OutcomeText(Outcome outcome);  // "better", "≈ none", "blurrier", ...
 
 // Two values with intervals, lower is better: kBetter only when a's interval

@@ -28,6 +28,11 @@ std::string Csv(const std::vector<JobResult>& rows) {
   for (const char* key : kSplit)
     header.insert(header.end(), {std::string(key), std::string(key) + "_lo", std::string(key) + "_hi"});
   header.insert(header.end(), {"cell_row", "band", "verdict", "label", "tables", "sparkle_count_ratio"});
+  // The reference noise's contrast (the decision rule's kVisibleContrast
+  // test), the cost ratio's interval and repetitions, and the static
+  // instruction counts of the row's kernel and of its batch's `none`.
+  header.insert(header.end(), {"ref_contrast", "bench_ratio_lo", "bench_ratio_hi", "bench_repetitions", "kernel_alu",
+                               "kernel_transcendental", "kernel_memory", "kernel_control", "none_kernel_total"});
   // How many of the report's tables a row sits in: `none` and supersample-N
   // read no derivatives and join each derivative source's table of their shot.
   std::map<const JobResult*, int> tables;
@@ -88,6 +93,20 @@ std::string Csv(const std::vector<JobResult>& rows) {
     verdict.erase(std::remove(verdict.begin(), verdict.end(), '*'), verdict.end());
     fields.insert(fields.end(), {CellRowOf(g), RoughnessClass(g.alpha), verdict, Label(r), std::to_string(tables[&r]),
                                  CsvNumber(EvidenceOf(r).sparkle_count_ratio)});
+    fields.push_back(CsvNumber(EvidenceOf(r).noise_contrast));
+    if (r.cost && r.cost->ratio_hi > 0) {
+      const BenchmarkCost& c = *r.cost;
+      fields.insert(fields.end(), {CsvNumber(c.ratio_lo), CsvNumber(c.ratio_hi), std::to_string(c.repetitions)});
+    } else {
+      fields.insert(fields.end(), {"", "", r.cost ? std::to_string(r.cost->repetitions) : ""});
+    }
+    if (r.cost && r.cost->kernel.Total() > 0) {
+      const shading::InstructionCensus& k = r.cost->kernel;
+      fields.insert(fields.end(), {std::to_string(k.alu), std::to_string(k.transcendental), std::to_string(k.memory),
+                                   std::to_string(k.control), std::to_string(r.cost->none_kernel.Total())});
+    } else {
+      fields.insert(fields.end(), {"", "", "", "", ""});
+    }
     table.AddRow(fields);
   }
   return table.Text();

@@ -100,6 +100,15 @@ void Overview(Document& doc, const std::vector<const Group*>& included, const st
 }
 
 // A ratio to `none` with both intervals' worst cases as its interval.
+// A cost ratio with the interval of its paired repetitions, where timed so.
+std::string CostText(const std::optional<BenchmarkCost>& cost) {
+  if (!cost) return "n/a";
+  std::string text = Fmt(cost->ratio_to_none, "%.2f") + "×";
+  if (cost->ratio_hi > 0 && cost->variant != "none")
+    text += " [" + Fmt(cost->ratio_lo, "%.2f") + ", " + Fmt(cost->ratio_hi, "%.2f") + "]";
+  return text;
+}
+
 std::string RatioWithInterval(double value, Interval ci, double none_value, Interval none_ci) {
   if (std::isnan(value) || !(none_value > 0)) return "n/a";
   Interval ratio;
@@ -173,10 +182,10 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
                      RatioWithInterval(e.tv_err, e.tv_err_ci, base.tv_err, base.tv_err_ci),
                      RatioWithInterval(e.spatial, e.spatial_ci, base.spatial, base.spatial_ci),
                      WithInterval(e.energy_bias, e.energy_ci, "%+.3f"),
-                     r->cost ? Fmt(r->cost->ratio_to_none, "%.2f") + "×" : "n/a", verdict});
+                     CostText(r->cost), verdict});
   }
   doc.Table({"variant", "joint error [95 %]", "tv_err, ratio to `none` [95 %]",
-             "spatial error, ratio to `none` [95 %]", "energy bias, fraction [95 %]", "cost, ratio to `none`",
+             "spatial error, ratio to `none` [95 %]", "energy bias, fraction [95 %]", "cost, ratio to `none` [95 %]",
              "verdict"},
             cells);
   // Every other column, for report.html (report.csv has them all too).

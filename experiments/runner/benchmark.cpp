@@ -3,7 +3,15 @@
 // so costs come from dedicated renders at a benchmark size, every variant of
 // a batch interleaved repetition by repetition (a slow spell of the machine
 // then hits all of them alike), after a warm-up frame that takes the JIT.
+// Each ratio to `none` is the geometric mean of the paired per-repetition
+// ratios, with a Student-t 95 % interval on their logarithms; rounds of
+// repetitions are added until every interval is within the spec's precision
+// (±3 % by default) or the repetition cap is reached. The order of the
+// variants reverses every repetition (ABBA), so a drift within a repetition
+// does not favour the first. Beside the times, the kernel's static
+// instruction counts: a cost that does not depend on the device.
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <set>
@@ -21,7 +29,38 @@ double Median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+// Student's t, two-sided 95 %, by degrees of freedom (1..30), then the
+// Cornish-Fisher expansion about the normal quantile, within 1e-3 beyond.
+double T975(int df) {
+  static const double table[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
+                                 2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086,
+                                 2.080,  2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042};
+  if (df >= 1 && df <= 30) return table[df - 1];
+  const double z = 1.959964;
+  return z + (z * z * z + z) / (4.0 * df) + (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96.0 * df * df);
+}
+
 }  // namespace
+
+RatioEstimate PairedRatio(const std::vector<double>& test_ms, const std::vector<double>& none_ms) {
+  RatioEstimate r;
+  std::vector<double> d;
+  for (std::size_t i = 0; i < test_ms.size() && i < none_ms.size(); ++i)
+    if (test_ms[i] > 0 && none_ms[i] > 0) d.push_back(std::log(test_ms[i] / none_ms[i]));
+  r.n = static_cast<int>(d.size());
+  if (d.empty()) return r;
+  double mean = 0;
+  for (double x : d) mean += x;
+  mean /= r.n;
+  r.ratio = std::exp(mean);
+  if (r.n < 2) return r;
+  double ss = 0;
+  for (double x : d) ss += (x - mean) * (x - mean);
+  const double half = T975(r.n - 1) * std::sqrt(ss / (r.n - 1) / r.n);
+  r.lo = std::exp(mean - half);
+  r.hi = std::exp(mean + half);
+  return r;
+}
 
 std::vector<BenchmarkBatch> BenchmarkBatches(const std::vector<Job>& jobs) {
   std::vector<BenchmarkBatch> batches;
@@ -63,7 +102,9 @@ std::string BenchmarkKernels(const BenchmarkBatch& batch, std::size_t k) {
     auto sources = SourcesOf(job);
     return sources ? sources->test.kernel : std::string("unresolved");
   };
-  return Fnv1a64Hex(kernel(batch.jobs[k]) + '\0' + kernel(batch.jobs.front()));
+  // "paired-2": the ABBA-interleaved paired ratios with intervals and
+  // instruction counts; costs timed the older way are timed again.
+  return Fnv1a64Hex(kernel(batch.jobs[k]) + '\0' + kernel(batch.jobs.front()) + '\0' + "paired-2");
 }
 
 Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, const BenchmarkOptions& bench,
@@ -81,17 +122,35 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
     if (auto warm = (*renderer)->RenderFrame(0); !warm) return Prefixed("benchmark of " + job.variant, warm.failure());
     renderers.push_back(std::move(*renderer));
   }
+  std::vector<shading::InstructionCensus> census;
+  for (const Job& job : batch.jobs) {
+    auto settings = JobSettings(job, options);
+    auto counted = settings ? render::CountKernelInstructions(*settings)
+                            : Result<shading::InstructionCensus>(settings.failure());
+    if (!counted) return Prefixed("instruction counts of " + job.variant, counted.failure());
+    census.push_back(*counted);
+  }
   std::vector<std::vector<double>> ms(renderers.size());
   const int frames = batch.jobs.front().frames;
-  for (int rep = 0; rep < bench.repetitions; ++rep) {
-    // Different frames of the path, the same ones for every variant.
-    const int frame = bench.repetitions > 1 ? rep * (frames - 1) / (bench.repetitions - 1) : 0;
-    for (std::size_t k = 0; k < renderers.size(); ++k) {
-      auto f = renderers[k]->RenderFrame(frame);
-      if (!f) return Prefixed("benchmark of " + batch.jobs[k].variant, f.failure());
-      ms[k].push_back(f->gpu_ms);
+  const int round = std::max(bench.repetitions, 2);
+  auto precise = [&] {
+    for (std::size_t k = 1; k < renderers.size(); ++k)
+      if (!PairedRatio(ms[k], ms.front()).Within(bench.precision)) return false;
+    return true;
+  };
+  int reps = 0;
+  do {
+    for (int r = 0; r < round; ++r, ++reps) {
+      // Frames spread over the path by the golden ratio, the same for every variant.
+      const int frame = static_cast<int>(std::fmod(reps * 0.6180339887, 1.0) * frames) % std::max(frames, 1);
+      for (std::size_t i = 0; i < renderers.size(); ++i) {
+        const std::size_t k = reps % 2 ? renderers.size() - 1 - i : i;
+        auto f = renderers[k]->RenderFrame(frame);
+        if (!f) return Prefixed("benchmark of " + batch.jobs[k].variant, f.failure());
+        ms[k].push_back(f->gpu_ms);
+      }
     }
-  }
+  } while (reps < bench.max_repetitions && !precise());
   std::vector<BenchmarkCost> costs;
   const double none_ms = Median(ms.front());
   for (std::size_t k = 0; k < renderers.size(); ++k) {
@@ -105,12 +164,17 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
     c.camera = job.camera;
     c.width = bench.width;
     c.height = bench.height;
-    c.repetitions = bench.repetitions;
+    c.repetitions = reps;
     c.median_ms = Median(ms[k]);
     c.min_ms = *std::min_element(ms[k].begin(), ms[k].end());
     c.max_ms = *std::max_element(ms[k].begin(), ms[k].end());
     c.none_median_ms = none_ms;
-    c.ratio_to_none = none_ms > 0 ? c.median_ms / none_ms : 0;
+    const RatioEstimate ratio = k == 0 ? RatioEstimate{1, 1, 1, reps} : PairedRatio(ms[k], ms.front());
+    c.ratio_to_none = ratio.ratio;
+    c.ratio_lo = ratio.lo;
+    c.ratio_hi = ratio.hi;
+    c.kernel = census[k];
+    c.none_kernel = census.front();
     c.core = BenchmarkKernels(batch, k);
     c.device = renderers[k]->device_name();
     c.driver = renderers[k]->device_driver();

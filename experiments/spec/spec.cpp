@@ -630,7 +630,7 @@ Spec ParseSpecObject(const json& j, const std::filesystem::path& base) {
     if (b.is_boolean()) {
       s.benchmark.enabled = b.get<bool>();
     } else if (b.is_object()) {
-      RejectUnknownKeys(b, {"size", "repetitions"}, "benchmark");
+      RejectUnknownKeys(b, {"size", "repetitions", "precision", "max_repetitions"}, "benchmark");
       if (b.contains("size")) {
         const json& size = b["size"];
         if (!size.is_array() || size.size() != 2) throw SpecError{"benchmark.size", "must be [width, height]"};
@@ -641,8 +641,19 @@ Spec ParseSpecObject(const json& j, const std::filesystem::path& base) {
       }
       if (b.contains("repetitions"))
         s.benchmark.repetitions = PositiveInt(b["repetitions"], "benchmark.repetitions", 1000);
+      if (b.contains("max_repetitions"))
+        s.benchmark.max_repetitions = PositiveInt(b["max_repetitions"], "benchmark.max_repetitions", 10000);
+      if (b.contains("precision")) {
+        s.benchmark.precision = Number(b["precision"], "benchmark.precision");
+        if (!(s.benchmark.precision > 0 && s.benchmark.precision < 1))
+          throw SpecError{"benchmark.precision", "must be in (0, 1): the half-width of each cost ratio's interval"};
+      }
+      if (s.benchmark.max_repetitions < s.benchmark.repetitions)
+        throw SpecError{"benchmark.max_repetitions", "must be at least benchmark.repetitions"};
     } else {
-      throw SpecError{"benchmark", "must be true, false or {\"size\": [w, h], \"repetitions\": R}"};
+      throw SpecError{"benchmark",
+                      "must be true, false or {\"size\": [w, h], \"repetitions\": R, \"precision\": P, "
+                      "\"max_repetitions\": M}"};
     }
   }
   if (j.contains("metrics")) {

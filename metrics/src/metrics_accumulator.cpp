@@ -292,6 +292,7 @@ void MetricsAccumulator::AddIntervals(MetricsReport* report, const cv::Mat& good
     const double floor = noise / (used * frames);
     const double tv_err = report->tv_err.value_or(0);
     report->tv_err_floor = tv_err > 0 ? std::min(floor / tv_err, 1.0) : (floor > 0 ? 1.0 : 0.0);
+    report->ref_noise = floor;
     // Noise of a sum in quadrature with the bootstrap's half-widths.
     auto widen = [](std::optional<Interval>& interval, double value, double sigma) {
       if (!interval) return;
@@ -368,6 +369,7 @@ Status MetricsAccumulator::Finish(MetricsReport* report) {
     // Every good pixel has all N samples, so sum_t = N * mean_t.
     report->energy_bias = RelativeBias(MeanOver(mean_test, good, 1) * frames, MeanOver(mean_ref, good, 1) * frames);
     report->energy_bias_map = EnergyBiasMap(mean_test, mean_ref, good, cv::Mat());
+    report->ref_mean = MeanOver(mean_ref, good, used);
     report->temporal_diff_err = MeanOver(diff_err_, good, used) / (frames - 1);
     if (!rmse_per_frame_.empty()) {
       double rmse = 0;

@@ -236,6 +236,8 @@ nlohmann::json ToJson(const MetricsReport& r) {
                       {"tile", r.bootstrap->tile},
                       {"seed", r.bootstrap->seed}};
   if (r.tv_err_floor) j["tv_err_floor"] = *r.tv_err_floor;
+  if (r.ref_noise) j["ref_noise"] = *r.ref_noise;
+  if (r.ref_mean) j["ref_mean"] = *r.ref_mean;
   if (r.warp_err) j["warp_err"] = *r.warp_err;
   if (r.sparkles) {
     const SparkleReport& s = *r.sparkles;

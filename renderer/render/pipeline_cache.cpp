@@ -194,6 +194,13 @@ Result<std::string> SpecializedKernelHash(const KernelModule& kernel, std::span<
   return *hash;
 }
 
+Result<shading::InstructionCensus> SpecializedKernelCensus(const KernelModule& kernel,
+                                                           std::span<const std::int32_t> specialization) {
+  auto specialized = SpecializedModule(kernel, specialization);
+  if (!specialized) return specialized.failure();
+  return shading::CountInstructions(*specialized);
+}
+
 struct PipelineSlot {
   std::once_flag compiled;
   std::shared_ptr<vk::ComputePipeline> pipeline;

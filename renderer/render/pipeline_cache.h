@@ -37,6 +37,10 @@ Result<std::shared_ptr<const KernelModule>> KernelSpirv(std::string_view kernel,
 // specialized module comes from the disk cache when it is there.
 Result<std::string> SpecializedKernelHash(const KernelModule& kernel, std::span<const std::int32_t> specialization);
 
+// shading::CountInstructions of the same specialized module (not kept).
+Result<shading::InstructionCensus> SpecializedKernelCensus(const KernelModule& kernel,
+                                                           std::span<const std::int32_t> specialization);
+
 // A device shared by every renderer asking for the same options, created on
 // first use and never destroyed: tearing Vulkan down from static destructors
 // would race the driver's own teardown, and the OS reclaims everything at

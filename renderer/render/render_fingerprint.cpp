@@ -23,17 +23,36 @@ void Append(std::string& bytes, const T& value) {
   Append(bytes, std::span<const T>(&value, 1));
 }
 
-}  // namespace
+struct ResolvedKernel {
+  ResolvedVariant variant;
+  std::shared_ptr<const KernelModule> module;
+  std::vector<std::int32_t> specialization;
+};
 
-Result<RenderFingerprint> FingerprintRender(const RenderSettings& settings) {
+Result<ResolvedKernel> KernelOf(const RenderSettings& settings) {
   if (Status s = ValidateSettings(settings); !s) return s.failure();
   auto variant = ResolveVariant(settings);
   if (!variant) return variant.failure();
   const bool sg_light = settings.scene.light.type == shading::LightType::kSg;
   auto module = KernelSpirv("render.comp", variant->user.get(), sg_light, nullptr);
   if (!module) return module.failure();
-  const auto specialization = KernelSpecialization(*variant, settings);
-  auto kernel = SpecializedKernelHash(**module, specialization);
+  auto specialization = KernelSpecialization(*variant, settings);
+  return ResolvedKernel{std::move(*variant), std::move(*module), {specialization.begin(), specialization.end()}};
+}
+
+}  // namespace
+
+Result<shading::InstructionCensus> CountKernelInstructions(const RenderSettings& settings) {
+  auto kernel = KernelOf(settings);
+  if (!kernel) return kernel.failure();
+  return SpecializedKernelCensus(*kernel->module, kernel->specialization);
+}
+
+Result<RenderFingerprint> FingerprintRender(const RenderSettings& settings) {
+  auto resolved = KernelOf(settings);
+  if (!resolved) return resolved.failure();
+  const auto* variant = &resolved->variant;
+  auto kernel = SpecializedKernelHash(*resolved->module, resolved->specialization);
   if (!kernel) return kernel.failure();
 
   // The renderer's own structs, so that a field it uploads cannot be left out.

@@ -1,6 +1,7 @@
 // CanonicalSpirvHash: a structural hash of a SPIR-V module from its entry
 // point. Ids are replaced by hashes of what defines them, so the numbering
 // and the order of the module's declarations drop out.
+#include <glslang/SPIRV/GLSL.std.450.h>
 #include <glslang/SPIRV/spirv.hpp>
 #include <spirv-tools/libspirv.h>
 #include <spirv-tools/optimizer.hpp>
@@ -156,13 +157,11 @@ class StructuralHash {
   std::unordered_map<std::uint32_t, std::uint64_t> memo_;
 };
 
-}  // namespace
 
-// Bump when the passes or the structural hash change.
-std::string CanonicalHashVersion() { return "structural-1 " + SpecializerVersion(); }
-
-Result<std::string> CanonicalSpirvHash(const Spirv& module) {
-  using R = Result<std::string>;
+// The module every function inlined into the entry point, the frozen
+// constants propagated and the debug info stripped, as parsed instructions.
+Result<std::vector<Instruction>> CanonicalInstructions(const Spirv& module) {
+  using R = Result<std::vector<Instruction>>;
   spvtools::Optimizer optimizer(SPV_ENV_VULKAN_1_2);
   std::string messages;
   optimizer.SetMessageConsumer([&](spv_message_level_t level, const char*, const spv_position_t&, const char* text) {
@@ -200,10 +199,111 @@ Result<std::string> CanonicalSpirvHash(const Spirv& module) {
   spvDiagnosticDestroy(diagnostic);
   spvContextDestroy(context);
   if (parsed != SPV_SUCCESS) return R::Failure("canonicalizing the kernel failed: " + why, ErrorCode::kInternal);
-  const std::uint64_t h = StructuralHash(std::move(instructions)).Module();
+  return instructions;
+}
+
+// Which unit an extended GLSL.std.450 instruction needs: the ones a GPU runs
+// on its special-function unit (exp, log, sqrt, rsqrt, trigonometry), and
+// the vector helpers built on them (length, normalize, distance: a sqrt or
+// rsqrt each), are transcendental; min, max, clamp, mix, fma, floor, abs and
+// the like are plain ALU.
+bool Transcendental(std::uint32_t glsl) {
+  switch (glsl) {
+    case GLSLstd450Sin: case GLSLstd450Cos: case GLSLstd450Tan: case GLSLstd450Asin: case GLSLstd450Acos:
+    case GLSLstd450Atan: case GLSLstd450Atan2: case GLSLstd450Sinh: case GLSLstd450Cosh: case GLSLstd450Tanh:
+    case GLSLstd450Asinh: case GLSLstd450Acosh: case GLSLstd450Atanh: case GLSLstd450Pow: case GLSLstd450Exp:
+    case GLSLstd450Log: case GLSLstd450Exp2: case GLSLstd450Log2: case GLSLstd450Sqrt:
+    case GLSLstd450InverseSqrt: case GLSLstd450Length: case GLSLstd450Distance: case GLSLstd450Normalize:
+    case GLSLstd450Refract:
+      return true;
+    default: return false;
+  }
+}
+
+bool MemoryStorage(std::uint32_t storage_class) {
+  switch (storage_class) {
+    case spv::StorageClassFunction:
+    case spv::StorageClassPrivate: return false;  // registers once the optimizer is through
+    default: return true;
+  }
+}
+
+}  // namespace
+
+// Bump when the passes or the structural hash change.
+std::string CanonicalHashVersion() { return "structural-1 " + SpecializerVersion(); }
+
+Result<std::string> CanonicalSpirvHash(const Spirv& module) {
+  auto instructions = CanonicalInstructions(module);
+  if (!instructions) return instructions.failure();
+  const std::uint64_t h = StructuralHash(std::move(*instructions)).Module();
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
   return std::string(hex);
+}
+
+Result<InstructionCensus> CountInstructions(const Spirv& module) {
+  auto instructions = CanonicalInstructions(module);
+  if (!instructions) return instructions.failure();
+  InstructionCensus census;
+  std::uint32_t glsl_set = 0;
+  std::unordered_map<std::uint32_t, std::uint32_t> storage;  // pointer id -> storage class
+  bool in_function = false;
+  for (const Instruction& x : *instructions) {
+    const auto& w = x.words;
+    switch (x.opcode) {
+      case spv::OpExtInstImport: glsl_set = x.result; continue;
+      case spv::OpVariable: storage[x.result] = w[3]; continue;
+      case spv::OpAccessChain:
+      case spv::OpInBoundsAccessChain:
+      case spv::OpPtrAccessChain:
+        if (auto it = storage.find(w[3]); it != storage.end()) storage[x.result] = it->second;
+        continue;
+      case spv::OpFunction: in_function = true; continue;
+      case spv::OpFunctionEnd: in_function = false; continue;
+      default: break;
+    }
+    if (!in_function) continue;
+    switch (x.opcode) {
+      case spv::OpLabel: case spv::OpPhi: case spv::OpLoopMerge: case spv::OpSelectionMerge:
+      case spv::OpFunctionParameter: case spv::OpUndef: case spv::OpNop:
+        break;  // no work of their own
+      case spv::OpCompositeConstruct: case spv::OpCompositeExtract: case spv::OpCompositeInsert:
+      case spv::OpVectorShuffle: case spv::OpCopyObject:
+        break;  // register moves a compiler folds away
+      case spv::OpBranch: case spv::OpBranchConditional: case spv::OpSwitch: case spv::OpReturn:
+      case spv::OpReturnValue: case spv::OpKill: case spv::OpUnreachable: case spv::OpControlBarrier:
+      case spv::OpMemoryBarrier: case spv::OpFunctionCall:
+        ++census.control;
+        break;
+      case spv::OpLoad: {
+        auto it = storage.find(w[3]);
+        if (it == storage.end() || MemoryStorage(it->second)) ++census.memory;
+        break;
+      }
+      case spv::OpStore: {
+        auto it = storage.find(w[1]);
+        if (it == storage.end() || MemoryStorage(it->second)) ++census.memory;
+        break;
+      }
+      case spv::OpFDiv: case spv::OpFRem: case spv::OpFMod:
+        ++census.transcendental;  // a reciprocal on the special-function unit
+        break;
+      case spv::OpExtInst:
+        if (w[3] == glsl_set && Transcendental(w[4])) ++census.transcendental;
+        else ++census.alu;
+        break;
+      default:
+        if ((x.opcode >= spv::OpImageSampleImplicitLod && x.opcode <= spv::OpImageWrite) ||
+            (x.opcode >= spv::OpAtomicLoad && x.opcode <= spv::OpAtomicXor) ||
+            (x.opcode >= spv::OpImageSparseSampleImplicitLod && x.opcode <= spv::OpImageSparseRead) ||
+            x.opcode == spv::OpCopyMemory)
+          ++census.memory;
+        else
+          ++census.alu;  // arithmetic, comparisons, conversions, selects, bit and group operations
+    }
+  }
+  return census;
 }
 
 }  // namespace shimmer::shading

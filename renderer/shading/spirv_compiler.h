@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "shimmer/core/result.h"
+#include "shimmer/renderer/shading.h"
 
 namespace shimmer::shading {
 
@@ -52,6 +53,15 @@ std::string SpecializerVersion();
 // kernel runs moves it. The optimizer keeps the arithmetic, so equal hashes
 // mean equal computations. Job ids are built on it (experiments/spec/job.h).
 Result<std::string> CanonicalSpirvHash(const Spirv& module);
+// The static instruction counts (InstructionCensus, shading.h) of the canonical form of `module` (the code this
+// kernel runs, every function inlined), by the unit they need: a
+// device-independent cost beside timings on one device. A vector operation
+// counts once; loops count once. `memory` is loads and stores of buffers,
+// images and push constants (not of locals), image and atomic operations;
+// `transcendental` is exp, log, pow, sqrt, rsqrt, trigonometry, length,
+// normalize, distance and division; `control` is branches and barriers;
+// `alu` is the rest of the arithmetic, comparisons, conversions and selects.
+Result<InstructionCensus> CountInstructions(const Spirv& module);
 // Names the canonical form (its passes and the optimizer's version), for
 // cache keys of canonical hashes.
 std::string CanonicalHashVersion();

@@ -5,6 +5,8 @@
 // one, the runner-up is tied unless intervals separate.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "decision_rule.h"
 #include "report_document.h"
 
@@ -19,6 +21,7 @@ struct RowNumbers {
   double spatial = 0.05, spatial_half = 0.003;
   double bias = 0, bias_half = 0.01;
   double floor = 0.01;
+  double ref_noise = -1, ref_mean = 1;  // ref_noise < 0: not measured (older stores)
 };
 
 JobResult Row(const std::string& scene, const std::string& material, const std::string& camera,
@@ -28,6 +31,7 @@ JobResult Row(const std::string& scene, const std::string& material, const std::
   r.job.derivatives = "quad";
   r.metrics = {{"tv_err", n.tv_err},   {"relmse", n.joint},         {"relmse_spatial", n.spatial},
                {"energy_bias", n.bias}, {"tv_err_floor", n.floor}, {"tv_ratio", 1.0}};
+  if (n.ref_noise >= 0) r.metrics["ref_noise"] = n.ref_noise, r.metrics["ref_mean"] = n.ref_mean;
   r.metrics["ci95"] = {{"tv_err", {n.tv_err - n.tv_half, n.tv_err + n.tv_half}},
                        {"relmse", {n.joint - n.joint_half, n.joint + n.joint_half}},
                        {"relmse_spatial", {n.spatial - n.spatial_half, n.spatial + n.spatial_half}},
@@ -105,6 +109,27 @@ TEST(DecisionRule, ATieDominatedByReferenceNoiseIsUnresolved) {
   // A noisy row that is steadier beyond the noise (intervals apart) is still better.
   noisy.tv_err = 0.3, noisy.floor = 0.9;
   EXPECT_EQ(Decide(Of(noisy), Of(kNone)), Outcome::kBetter);
+}
+
+TEST(DecisionRule, ATieUnderNoiseTooFaintToSeeIsATie) {
+  // The reference's noise explains 90 % of tv_err, as above, but its
+  // contrast is sqrt(1e-6) / 0.5 = 0.2 %: no visible flicker hides under it.
+  RowNumbers faint;
+  faint.tv_err = 0.95, faint.floor = 0.9, faint.ref_noise = 1e-6, faint.ref_mean = 0.5;
+  RowNumbers none = kNone;
+  none.ref_noise = 1e-6, none.ref_mean = 0.5;
+  EXPECT_TRUE(NoiseBelowVisibility(Of(faint), Of(none)));
+  EXPECT_EQ(Decide(Of(faint), Of(none)), Outcome::kTied);
+  // A contrast of 2 %: a flicker could hide under it.
+  faint.ref_noise = none.ref_noise = 1e-4;
+  EXPECT_FALSE(NoiseBelowVisibility(Of(faint), Of(none)));
+  EXPECT_EQ(Decide(Of(faint), Of(none)), Outcome::kUnresolved);
+  // Just above the limit (1.1 %).
+  faint.ref_noise = none.ref_noise = std::pow(1.1 * kVisibleContrast * 0.5, 2);
+  EXPECT_EQ(Decide(Of(faint), Of(none)), Outcome::kUnresolved);
+  // Unknown contrast (a store measured before ref_noise): unresolved, as before.
+  faint.ref_noise = -1;
+  EXPECT_EQ(Decide(Of(faint), Of(kNone)), Outcome::kUnresolved);
 }
 
 TEST(DecisionRule, LessSteadyAndUnknown) {

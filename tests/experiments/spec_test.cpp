@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 #include <string_view>
 #include <utility>
@@ -378,7 +379,7 @@ std::string TrustSpec(const std::string& tail) {
 TEST(Spec, ReferenceReplicatesConvergenceAndBenchmarkParse) {
   auto r = ParseSpec(TrustSpec(R"(,
   "reference": {"spp": 6, "replicates": 8, "converge": {"energy": 0.01, "tv": 0.2}},
-  "benchmark": {"size": [256, 128], "repetitions": 3})"),
+  "benchmark": {"size": [256, 128], "repetitions": 3, "precision": 0.05, "max_repetitions": 30})"),
                      "v.json");
   ASSERT_TRUE(r) << r.error();
   EXPECT_EQ(r->reference.replicates, 8);
@@ -388,7 +389,10 @@ TEST(Spec, ReferenceReplicatesConvergenceAndBenchmarkParse) {
   EXPECT_EQ(r->benchmark.width, 256);
   EXPECT_EQ(r->benchmark.height, 128);
   EXPECT_EQ(r->benchmark.repetitions, 3);
-  // Defaults: 4 replicates, 2 % energy and 10 % tv, 512x512 x 5.
+  EXPECT_DOUBLE_EQ(r->benchmark.precision, 0.05);
+  EXPECT_EQ(r->benchmark.max_repetitions, 30);
+  // Defaults: 4 replicates, 2 % energy and 10 % tv, 512x512 in rounds of 5
+  // until ±3 %, at most 60.
   auto d = ParseSpec(TrustSpec(""), "v.json");
   ASSERT_TRUE(d) << d.error();
   EXPECT_EQ(d->reference.replicates, 4);
@@ -396,6 +400,8 @@ TEST(Spec, ReferenceReplicatesConvergenceAndBenchmarkParse) {
   EXPECT_DOUBLE_EQ(d->reference.converge.tv, 0.10);
   EXPECT_EQ(d->benchmark.width, 512);
   EXPECT_EQ(d->benchmark.repetitions, 5);
+  EXPECT_DOUBLE_EQ(d->benchmark.precision, 0.03);
+  EXPECT_EQ(d->benchmark.max_repetitions, 60);
   auto off = ParseSpec(TrustSpec(",\n  \"benchmark\": false"), "v.json");
   ASSERT_TRUE(off) << off.error();
   EXPECT_FALSE(off->benchmark.enabled);
@@ -418,6 +424,8 @@ TEST(Spec, ReferenceReplicatesConvergenceAndBenchmarkParse) {
            {R"(, "benchmark": {"size": [511, 512]})", "benchmark.size: width and height must be even"},
            {R"(, "benchmark": {"repetitions": 0})", "benchmark.repetitions: must be an integer"},
            {R"(, "benchmark": 3)", "benchmark: must be true, false or"},
+           {R"(, "benchmark": {"precision": 0})", "benchmark.precision: must be in (0, 1)"},
+           {R"(, "benchmark": {"repetitions": 8, "max_repetitions": 4})", "max_repetitions: must be at least"},
        }) {
     auto bad = ParseSpec(TrustSpec(tail), "bad.json");
     ASSERT_FALSE(bad) << tail;
@@ -444,6 +452,31 @@ TEST(Spec, ReferenceSppByMaterialGivesSharpMaterialsTheirOwnSampleCount) {
     ASSERT_FALSE(bad) << tail;
     EXPECT_NE(bad.error().find(expected), std::string::npos) << bad.error();
   }
+}
+
+TEST(Spec, PairedCostRatiosCarryAStudentTInterval) {
+  // Exact ratios: no spread, a zero-width interval.
+  RatioEstimate exact = PairedRatio({12, 24, 36}, {10, 20, 30});
+  EXPECT_NEAR(exact.ratio, 1.2, 1e-12);
+  EXPECT_NEAR(exact.lo, 1.2, 1e-12);
+  EXPECT_NEAR(exact.hi, 1.2, 1e-12);
+  EXPECT_TRUE(exact.Within(0.03));
+  // log ratios 0.1, 0.2, 0.3: mean 0.2, sd 0.1, t(2) = 4.303.
+  RatioEstimate spread = PairedRatio({std::exp(0.1), std::exp(0.2), std::exp(0.3)}, {1, 1, 1});
+  EXPECT_EQ(spread.n, 3);
+  EXPECT_NEAR(spread.ratio, std::exp(0.2), 1e-12);
+  EXPECT_NEAR(spread.lo, std::exp(0.2 - 4.303 * 0.1 / std::sqrt(3.0)), 1e-9);
+  EXPECT_NEAR(spread.hi, std::exp(0.2 + 4.303 * 0.1 / std::sqrt(3.0)), 1e-9);
+  EXPECT_FALSE(spread.Within(0.03));
+  // Pairing: a common drift (the machine slowing) cancels.
+  RatioEstimate drift = PairedRatio({1.1, 2.2, 4.4, 8.8}, {1, 2, 4, 8});
+  EXPECT_NEAR(drift.lo, 1.1, 1e-12);
+  EXPECT_NEAR(drift.hi, 1.1, 1e-12);
+  // One pair: a point, no interval.
+  RatioEstimate one = PairedRatio({2}, {1});
+  EXPECT_DOUBLE_EQ(one.ratio, 2);
+  EXPECT_EQ(one.hi, 0);
+  EXPECT_FALSE(one.Within(0.5));
 }
 
 TEST(Spec, BenchmarkBatchesHoldEveryVariantOfAScenesDerivativeSourceWithNoneFirst) {

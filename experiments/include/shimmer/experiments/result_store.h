@@ -15,6 +15,7 @@
 
 #include "shimmer/core/result.h"
 #include "shimmer/experiments/job.h"
+#include "shimmer/renderer/shading.h"
 
 struct sqlite3;
 
@@ -44,6 +45,12 @@ struct ShotCheck {
   bool converged = false;                   // every change within its tolerance
 };
 
+}  // namespace shimmer::experiments
+namespace shimmer::shading {
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(InstructionCensus, alu, transcendental, memory, control)
+}  // namespace shimmer::shading
+namespace shimmer::experiments {
+
 // Cost as a benchmark (DESIGN.md, Trust): dedicated timing renders at the
 // benchmark size, every variant of a (scene, derivative source) interleaved
 // in one batch after warm-up. One per (scene, derivatives, variant, params,
@@ -55,11 +62,17 @@ struct BenchmarkCost {
   int width = 0, height = 0, repetitions = 0;
   double median_ms = 0, min_ms = 0, max_ms = 0;  // GPU ms per frame over the repetitions
   double none_median_ms = 0;                     // `none` in the same batch
-  double ratio_to_none = 0;                      // median_ms / none_median_ms
+  // The geometric mean of the paired per-repetition ratios to `none` and its
+  // 95 % interval (RatioEstimate). Older rows: median_ms / none_median_ms
+  // and no interval (ratio_lo = ratio_hi = 0).
+  double ratio_to_none = 0, ratio_lo = 0, ratio_hi = 0;
   std::string device, driver;
   // The kernels it was timed with (BenchmarkKernels): a cost of other
   // kernels is timed again. Older rows: the shading core's text hash.
   std::string core;
+  // Static instruction counts of this kernel and of `none`'s in the batch
+  // (all 0 in older rows).
+  shading::InstructionCensus kernel, none_kernel;
 };
 
 // Fills the changes (d_tv_ref, d_energy_bias, d_tv_err) and the verdict of a
@@ -79,7 +92,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotCheck, reference_id, scene, 
                                                 tol_tv, unconverged_pixels, converged)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BenchmarkCost, scene, derivatives, variant, params, material, camera,
                                                 width, height, repetitions, median_ms, min_ms, max_ms, none_median_ms,
-                                                ratio_to_none, device, driver, core)
+                                                ratio_to_none, ratio_lo, ratio_hi, device, driver, core, kernel,
+                                                none_kernel)
 
 struct JobResult {
   std::string id;

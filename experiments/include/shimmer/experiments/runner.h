@@ -117,6 +117,17 @@ Result<RunPlan> PlanRun(const std::vector<Job>& jobs, const RunOptions& options)
 
 // Renders every job of `batch` at the benchmark size, interleaved, after one
 // warm-up frame each; GPU ms per frame from the renderer's timestamps.
+// A ratio of GPU times to `none`'s from paired repetitions: the geometric
+// mean of the per-repetition ratios and the Student-t 95 % interval of their
+// logarithms (lo = hi = 0 with fewer than two pairs).
+struct RatioEstimate {
+  double ratio = 0, lo = 0, hi = 0;
+  int n = 0;
+  // The interval lies within ±precision of the ratio.
+  bool Within(double precision) const { return n >= 2 && hi <= ratio * (1 + precision) && lo >= ratio * (1 - precision); }
+};
+RatioEstimate PairedRatio(const std::vector<double>& test_ms, const std::vector<double>& none_ms);
+
 Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, const BenchmarkOptions& bench,
                                                 const RunOptions& options);
 

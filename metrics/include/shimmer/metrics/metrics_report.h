@@ -88,6 +88,12 @@ struct MetricsReport {
   // With a reference carrying stderr.Y: mean over M and t of stderr.Y^2 over
   // tv_err, in [0, 1]: the share of tv_err the reference's own noise explains.
   std::optional<double> tv_err_floor;
+  // F itself (luminance², the variance the reference's noise adds), and the
+  // reference's mean luminance over M and t: sqrt(F) / ref_mean is the
+  // reference noise's contrast, what the decision rule compares with the
+  // smallest visible flicker (experiments/report/decision_rule.h).
+  std::optional<double> ref_noise;
+  std::optional<double> ref_mean;
   // With MetricsOptions::sparkle_threshold > 0.
   std::optional<SparkleReport> sparkles;
 

@@ -171,6 +171,10 @@ struct RenderFingerprint {
 // the field) or a kernel that does not compile.
 Result<RenderFingerprint> FingerprintRender(const RenderSettings& settings);
 
+// The static instruction counts of the kernel a render with `settings` runs
+// (shading::InstructionCensus): what it costs on any device, by unit.
+Result<shading::InstructionCensus> CountKernelInstructions(const RenderSettings& settings);
+
 struct DeviceDescription {
   std::string name, driver;
   std::string type;  // "discrete", "integrated", "virtual", "cpu", "other"

@@ -17,6 +17,14 @@
 
 namespace shimmer::shading {
 
+// A kernel's static instruction counts by the unit they need
+// (CountInstructions, spirv_compiler.h): a device-independent cost. A vector
+// operation counts once, a loop body once.
+struct InstructionCensus {
+  int alu = 0, transcendental = 0, memory = 0, control = 0;
+  int Total() const { return alu + transcendental + memory + control; }
+};
+
 // kGlints: Zirr and Kaplanyan's biscale glints (glints.glsl), alpha its
 // microdetails' Beckmann slopes.
 enum class Ndf { kGgx = 0, kBeckmann = 1, kBlinnPhong = 2, kGlints = 3 };

@@ -13,7 +13,7 @@
 
 #include "shimmer/renderer/renderer.h"
 #include "shimmer/renderer/scene.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace {
 

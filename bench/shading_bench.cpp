@@ -5,7 +5,7 @@
 #include <random>
 #include <vector>
 
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace {
 
@@ -41,7 +41,7 @@ const std::vector<Input>& Inputs() {
 void BM_Variant(benchmark::State& state) {
   const VariantInfo& info = Variants()[state.range(0)];
   const Params<double> d = ResolveParams(info, {}).value();
-  const Params<float> params{float(d.fp_max), float(d.fp_min_cap), float(d.sigma2), float(d.kappa)};
+  const Params<float> params = ParamsCast<float>(d);
   const auto& inputs = Inputs();
   for (auto _ : state) {
     for (const Input& in : inputs) {

@@ -12,8 +12,8 @@
 #include "commands.h"
 #include "shimmer/core/number_text.h"
 #include "shimmer/renderer/renderer.h"
-#include "shimmer/renderer/shading.h"
-#include "shimmer/renderer/user_variant.h"
+#include "shimmer/shading/shading.h"
+#include "shimmer/shading/user_variant.h"
 
 namespace shimmer::cli {
 
@@ -78,7 +78,7 @@ shading::Footprint<T> FootprintOf(const NdfOptions& o) {
 template <class T>
 shading::FilteredNdf<double> Evaluate(const shading::VariantInfo& info, shading::Ndf ndf, const NdfOptions& o,
                                       const shading::Params<double>& p) {
-  shading::Params<T> pt{T(p.fp_max), T(p.fp_min_cap), T(p.sigma2), T(p.kappa), T(p.nm_scale)};
+  const auto pt = shading::ParamsCast<T>(p);
   glm::vec<2, T> alpha{T(o.alpha[0]), T(o.alpha.size() > 1 ? o.alpha[1] : o.alpha[0])};
   const auto r = shading::EvaluateVariant<T>(info.id, ndf, alpha, FootprintOf<T>(o), pt);
   return {double(r.slope_density), double(r.density), {double(r.alpha_eff.x), double(r.alpha_eff.y)}};

@@ -6,7 +6,7 @@
 
 #include "commands.h"
 #include "shimmer/core/directories.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::cli {
 

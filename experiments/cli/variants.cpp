@@ -7,8 +7,8 @@
 
 #include "commands.h"
 #include "shimmer/renderer/renderer.h"
-#include "shimmer/renderer/shading.h"
-#include "shimmer/renderer/user_variant.h"
+#include "shimmer/shading/shading.h"
+#include "shimmer/shading/user_variant.h"
 
 namespace shimmer::cli {
 

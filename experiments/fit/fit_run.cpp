@@ -9,8 +9,8 @@
 #include "shimmer/experiments/output_files.h"
 #include "shimmer/experiments/result_store.h"
 #include "shimmer/renderer/scene.h"
-#include "shimmer/renderer/shading.h"
-#include "shimmer/renderer/user_variant.h"
+#include "shimmer/shading/shading.h"
+#include "shimmer/shading/user_variant.h"
 
 namespace shimmer::experiments {
 

@@ -16,7 +16,7 @@
 #include "shimmer/experiments/output_files.h"
 #include "shimmer/experiments/sg_accuracy.h"
 #include "shimmer/renderer/scene.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::experiments {
 

@@ -12,7 +12,7 @@
 #include "report_document.h"
 #include "shimmer/experiments/fit_report.h"
 #include "shimmer/experiments/output_files.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::experiments::report {
 

@@ -25,7 +25,7 @@
 #include "shimmer/metrics/metrics_report.h"
 #include "shimmer/renderer/renderer.h"
 #include "shimmer/renderer/scene.h"
-#include "shimmer/renderer/user_variant.h"
+#include "shimmer/shading/user_variant.h"
 
 namespace shimmer::experiments {
 

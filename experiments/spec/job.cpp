@@ -7,8 +7,8 @@
 
 #include "shimmer/metrics/metrics_version.h"
 #include "shimmer/renderer/scene.h"
-#include "shimmer/renderer/shading.h"
-#include "shimmer/renderer/user_variant.h"
+#include "shimmer/shading/shading.h"
+#include "shimmer/shading/user_variant.h"
 
 namespace shimmer::experiments {
 

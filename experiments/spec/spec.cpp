@@ -15,8 +15,8 @@
 #include "shimmer/core/number_text.h"
 #include "shimmer/renderer/renderer.h"
 #include "shimmer/renderer/scene.h"
-#include "shimmer/renderer/shading.h"
-#include "shimmer/renderer/user_variant.h"
+#include "shimmer/shading/shading.h"
+#include "shimmer/shading/user_variant.h"
 
 namespace shimmer::experiments {
 
@@ -800,7 +800,7 @@ Status CheckFitVariant(const Spec& spec, const std::string& variant, const std::
                            (names.empty() ? "none" : names) + ")");
   for (double bound : {lo, hi})
     if (Status s = shading::ValidateParam(param, bound); !s) return Status::Failure("bounds: " + s.error());
-  // The rule the renderer applies to every job (variant_registry.cpp), so
+  // The rule the renderer applies to every job (shading/src/variant_registry.cpp), so
   // that a fit is refused here for what its renders would be refused for.
   for (const std::string& m : spec.materials)
     if (auto mismatch = shading::MaterialMismatch(*info, scene::ParseMaterial(m, {})->ndf))

@@ -21,12 +21,16 @@ struct FrameConstants {
   float light_a[4], light_b[4], mat_a[4], mat_f0[4], mat_albedo[4];
   std::int32_t size[4];
 };
+// params and params2: shading::PackVariantParams, in the table's slot order.
 struct Push {
   float params[4];
   std::int32_t round[4];
   float target[4];
-  float params2[4];  // nm_scale, curvature_scale, curvature_bias, curvature_exponent
+  float params2[4];
 };
+static_assert(shading::kVariantParamCount == 8,
+              "the kernels carry the variant parameters in two vec4 slots: widen Push and "
+              "VARIANT_PARAMS_FROM_SLOTS's callers for more");
 
 // std140/std430 place vec4 members at multiples of 16 bytes with no padding
 // between them; these pin the C++ structs to render.comp's blocks.

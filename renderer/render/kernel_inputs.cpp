@@ -1,5 +1,6 @@
 #include "kernel_inputs.h"
 
+#include <algorithm>
 #include <bit>
 
 #include "shimmer/renderer/scene.h"
@@ -51,11 +52,9 @@ gpu::FrameConstants FrameConstantsOf(const RenderSettings& s, int index) {
 
 gpu::Push PushOf(const ResolvedVariant& variant, const RenderSettings& s, int index) {
   gpu::Push push{};
-  const auto& p = variant.params;
-  push.params[0] = float(p.fp_max), push.params[1] = float(p.fp_min_cap);
-  push.params[2] = float(p.sigma2), push.params[3] = float(p.kappa);
-  push.params2[0] = float(p.nm_scale), push.params2[1] = float(p.curvature_scale);
-  push.params2[2] = float(p.curvature_bias), push.params2[3] = float(p.curvature_exponent);
+  const auto slots = shading::PackVariantParams(variant.params);
+  std::copy_n(slots.begin(), 4, push.params);
+  std::copy_n(slots.begin() + 4, 4, push.params2);
   push.round[1] = index;
   push.round[2] = s.reference_replicates;
   push.round[3] = std::bit_cast<std::int32_t>(s.seed);

@@ -23,7 +23,7 @@ Result<shading::FilteredNdf<double>> ProbeNdf(const NdfProbe& probe) {
   auto buffer = device->context->CreateBuffer(11 * 4 * sizeof(float));
   if (!buffer) return buffer.failure();
   const shading::Footprint<double>& f = probe.footprint;
-  const shading::Params<double>& p = probe.params;
+  const auto slots = shading::PackVariantParams(probe.params);  // words 7 and 8
   // The layout ndf_probe.comp reads: words 0..9.
   const double in[10][4] = {{f.hpp.x, f.hpp.y, probe.alpha.x, probe.alpha.y},
                            {f.dhpp_dx.x, f.dhpp_dx.y, f.dhpp_dy.x, f.dhpp_dy.y},
@@ -32,8 +32,8 @@ Result<shading::FilteredNdf<double>> ProbeNdf(const NdfProbe& probe) {
                            {f.dn_dy.x, f.dn_dy.y, f.dn_dy.z, 0},
                            {f.dng_dx.x, f.dng_dx.y, f.dng_dx.z, 0},
                            {f.dng_dy.x, f.dng_dy.y, f.dng_dy.z, 0},
-                           {p.fp_max, p.fp_min_cap, p.sigma2, p.kappa},
-                           {p.nm_scale, p.curvature_scale, p.curvature_bias, p.curvature_exponent},
+                           {slots[0], slots[1], slots[2], slots[3]},
+                           {slots[4], slots[5], slots[6], slots[7]},
                            {f.dh_dx.x, f.dh_dx.y, f.dh_dy.x, f.dh_dy.y}};
   auto* words = static_cast<float*>((*buffer)->data());
   for (int i = 0; i < 10; ++i)

@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "shimmer/core/result.h"
-#include "shimmer/renderer/user_variant.h"
-#include "spirv_compiler.h"
+#include "shimmer/shading/user_variant.h"
+#include "shimmer/shading/spirv_compiler.h"
 #include "vk.h"
 
 namespace shimmer::render {

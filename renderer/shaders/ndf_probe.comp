@@ -31,15 +31,8 @@ void main() {
   f.dn_dy = probe.words[4].xyz;
   f.dng_dx = probe.words[5].xyz;
   f.dng_dy = probe.words[6].xyz;
-  VariantParams p;
-  p.fp_max = probe.words[7].x;
-  p.fp_min_cap = probe.words[7].y;
-  p.sigma2 = probe.words[7].z;
-  p.kappa = probe.words[7].w;
-  p.nm_scale = probe.words[8].x;  // a user variant may read its slot; normal maps need a scene
-  p.curvature_scale = probe.words[8].y;
-  p.curvature_bias = probe.words[8].z;
-  p.curvature_exponent = probe.words[8].w;
+  VariantParams p;  // a user variant may read the nm_scale slot; normal maps need a scene
+  VARIANT_PARAMS_FROM_SLOTS(p, probe.words[7], probe.words[8]);
   f.dh_dx = probe.words[9].xy;
   f.dh_dy = probe.words[9].zw;
 #ifdef SHIMMER_USER_VARIANT

@@ -58,10 +58,10 @@ layout(std430, binding = 2) buffer ImageBuf { float values[]; } image;  // plana
 layout(std430, binding = 3) buffer CounterBuf { uint unconverged; } counter;
 
 layout(push_constant) uniform Push {
-  vec4 params;   // fp_max, fp_min_cap, sigma2, kappa
+  vec4 params;   // the variant parameters' first four slots (VARIANT_PARAMS_FROM_SLOTS)
   ivec4 round;   // reference round, frame index, replicates K, seed (uint bits)
   vec4 target;   // relative standard error target (0: off), luminance floor
-  vec4 params2;  // nm_scale, curvature_scale, curvature_bias, curvature_exponent
+  vec4 params2;  // and their last four
 } pc;
 
 vec4 sceneWord(int i) { return scene.words[i]; }
@@ -258,14 +258,7 @@ void main() {
   m.glintAlphaL = frame.matA.z;
   m.glintDensity = frame.matA.w;
   VariantParams vp;
-  vp.fp_max = pc.params.x;
-  vp.fp_min_cap = pc.params.y;
-  vp.sigma2 = pc.params.z;
-  vp.kappa = pc.params.w;
-  vp.nm_scale = pc.params2.x;
-  vp.curvature_scale = pc.params2.y;
-  vp.curvature_bias = pc.params2.z;
-  vp.curvature_exponent = pc.params2.w;
+  VARIANT_PARAMS_FROM_SLOTS(vp, pc.params, pc.params2);
 
   if (SPP_N == 1) {
     // Pixels past the image edge still run: they are the quad's helper lanes.

@@ -20,7 +20,7 @@
 #include "shimmer/experiments/runner.h"
 #include "shimmer/experiments/spec.h"
 #include "shimmer/renderer/scene.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 #include "test_hooks.h"
 
 namespace shimmer::experiments {

@@ -5,7 +5,7 @@
 
 #include "shimmer/experiments/job.h"
 #include "shimmer/experiments/result_store.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::experiments::testing {
 

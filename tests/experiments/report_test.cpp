@@ -15,7 +15,7 @@
 #include "shimmer/experiments/csv.h"
 #include "shimmer/experiments/job.h"
 #include "shimmer/experiments/report.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 #include "temp_dir.h"
 
 namespace shimmer::experiments {

@@ -21,7 +21,7 @@
 
 #include "shimmer/renderer/renderer.h"
 #include "shimmer/renderer/scene.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 #include "test_hooks.h"
 
 namespace shimmer::render {

@@ -17,7 +17,7 @@
 
 #include "cli_run.h"
 #include "kernel_disk_cache.h"
-#include "spirv_compiler.h"
+#include "shimmer/shading/spirv_compiler.h"
 #include "temp_dir.h"
 #include "vk.h"
 

@@ -8,7 +8,7 @@
 #include "../shading/quadrature.h"
 #include "shimmer/renderer/normal_map.h"
 #include "shimmer/renderer/scene.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::scene {
 namespace {

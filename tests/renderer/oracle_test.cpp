@@ -6,7 +6,7 @@
 #include <cstdio>
 
 #include "shimmer/renderer/scene.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer {
 namespace {

@@ -6,7 +6,7 @@
 
 #include <cstring>
 
-#include "spirv_compiler.h"
+#include "shimmer/shading/spirv_compiler.h"
 #include "vk.h"
 
 namespace shimmer::vk {

@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "shimmer/renderer/shading.h"
-#include "shimmer/renderer/user_variant.h"
-#include "spirv_compiler.h"
+#include "shimmer/shading/shading.h"
+#include "shimmer/shading/user_variant.h"
+#include "shimmer/shading/spirv_compiler.h"
 
 namespace shimmer::shading {
 namespace {
@@ -70,12 +70,11 @@ void main() {
 }
 )";
 
-// The project's GLSL as it is in the source tree: every *.glsl under
-// renderer/shading and every *.comp under renderer/shaders, so that a new file
-// is covered without touching this test.
-std::vector<GlslFile> FilesOnDisk(const char* folder, const char* extension) {
+// The project's GLSL as it is on disk: every *.glsl under shading/glsl and
+// every *.comp under renderer/shaders, so that a new file is covered without
+// touching this test.
+std::vector<GlslFile> FilesOnDisk(const fs::path& root, const char* extension) {
   std::vector<GlslFile> files;
-  const fs::path root = fs::path(SHIMMER_SOURCE_DIR) / folder;
   for (const auto& e : fs::recursive_directory_iterator(root)) {
     if (!e.is_regular_file() || e.path().extension() != extension) continue;
     std::ifstream in(e.path(), std::ios::binary);
@@ -83,6 +82,19 @@ std::vector<GlslFile> FilesOnDisk(const char* folder, const char* extension) {
     text << in.rdbuf();
     files.push_back({e.path().lexically_relative(root).generic_string(), text.str()});
   }
+  std::sort(files.begin(), files.end(), [](const GlslFile& a, const GlslFile& b) { return a.name < b.name; });
+  return files;
+}
+
+std::vector<GlslFile> FilesOnDisk(const char* folder, const char* extension) {
+  return FilesOnDisk(fs::path(SHIMMER_SOURCE_DIR) / folder, extension);
+}
+
+// The shading core's GLSL: shading/glsl and the GLSL generated from
+// shading/variant_table.json.
+std::vector<GlslFile> ShadingFiles() {
+  std::vector<GlslFile> files = FilesOnDisk("shading/glsl", ".glsl");
+  for (GlslFile& f : FilesOnDisk(fs::path(SHIMMER_GENERATED_DIR), ".glsl")) files.push_back(std::move(f));
   std::sort(files.begin(), files.end(), [](const GlslFile& a, const GlslFile& b) { return a.name < b.name; });
   return files;
 }
@@ -107,7 +119,7 @@ std::vector<std::string> CoreOrder(const std::vector<GlslFile>& shading) {
 const char* kPrefix = "#version 460\n#extension GL_GOOGLE_include_directive : require\n#define real float\n";
 
 TEST(GlslCompile, ShadingSourcesOnDiskAreTheEmbeddedOnes) {
-  const std::vector<GlslFile> disk = FilesOnDisk("renderer/shading", ".glsl");
+  const std::vector<GlslFile> disk = ShadingFiles();
   ASSERT_GE(disk.size(), 8u);
   for (const GlslFile& f : disk) {
     bool embedded = false;
@@ -116,8 +128,7 @@ TEST(GlslCompile, ShadingSourcesOnDiskAreTheEmbeddedOnes) {
         embedded = true;
         EXPECT_EQ(text, f.text) << f.name << " differs from its embedded copy (stale build?)";
       }
-    EXPECT_TRUE(embedded) << "renderer/shading/" << f.name
-                          << " is not embedded: add it to SHADING_GLSL in renderer/CMakeLists.txt";
+    EXPECT_TRUE(embedded) << f.name << " is not embedded: add it to SHADING_GLSL in shading/CMakeLists.txt";
   }
   EXPECT_EQ(GlslSources().size(), disk.size());
 }
@@ -126,7 +137,7 @@ TEST(GlslCompile, EveryShadingFileCompilesToSpirvInItsContext) {
   // Each file is an include-only fragment: compiled after the files core.glsl
   // includes before it, so that an error points at that file. A file core.glsl
   // does not include is compiled after the whole core.
-  const std::vector<GlslFile> disk = FilesOnDisk("renderer/shading", ".glsl");
+  const std::vector<GlslFile> disk = ShadingFiles();
   const std::vector<std::string> order = CoreOrder(disk);
   ASSERT_GE(order.size(), 7u);
   int compiled = 0;
@@ -153,7 +164,7 @@ TEST(GlslCompile, EveryShadingFileCompilesToSpirvInItsContext) {
 // takes a user variant file (--variant-file), with SHIMMER_USER_VARIANT defined
 // after #version, a user_params.glsl and a user_variant.glsl, as pipeline_cache.cpp's KernelFiles does.
 TEST(GlslCompile, EveryKernelCompilesToSpirv) {
-  std::vector<GlslFile> extra = FilesOnDisk("renderer/shading", ".glsl");
+  std::vector<GlslFile> extra = ShadingFiles();
   for (GlslFile& f : FilesOnDisk("renderer/shaders", ".glsl")) extra.push_back(std::move(f));  // channels.glsl
   extra.push_back({"user_params.glsl", UserParamsGlsl(*ParseUserVariant("", "user.glsl"))});
   extra.push_back({"user_variant.glsl",

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "spirv_compiler.h"
+#include "shimmer/shading/spirv_compiler.h"
 
 namespace shimmer::shading {
 namespace {

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "cli_run.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace {
 

@@ -1,11 +1,63 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+#include <string>
 
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::shading {
-TEST(Catalogue, IdsMatchGlslConstants) { EXPECT_TRUE(CatalogueMatchesGlsl()); }
+// The GLSL constants the kernels dispatch on and the C++ catalogue are
+// generated from one table (shading/variant_table.json): every entry's id is
+// its constant's value in the GLSL the kernels compile, and every constant
+// names an entry.
+TEST(Catalogue, IdsMatchTheGeneratedGlslConstants) {
+  std::string_view glsl;
+  for (const auto& [file, text] : GlslSources())
+    if (file == "variant_table.glsl") glsl = text;
+  ASSERT_FALSE(glsl.empty()) << "variant_table.glsl is not among the embedded GLSL sources";
+  std::map<std::string, int> value;  // catalogue name -> VARIANT_* or NMF_* value
+  int stride = 0;
+  std::istringstream in{std::string(glsl)};
+  for (std::string line; std::getline(in, line);) {
+    char constant[64], name[64];
+    int v = 0;
+    if (std::sscanf(line.c_str(), "const int %63s = %d;  // %63s", constant, &v, name) == 3 &&
+        std::string(constant) != "NMF_NONE")
+      value[name] = v;
+    if (std::sscanf(line.c_str(), "const int NMF_STRIDE = %d;", &v) == 1) stride = v;
+  }
+  EXPECT_EQ(stride, kNormalMapFilterStride);
+  ASSERT_EQ(value.size(), Variants().size());
+  for (const VariantInfo& info : Variants()) {
+    ASSERT_TRUE(value.count(std::string(info.name))) << info.name;
+    const int v = value[std::string(info.name)];
+    EXPECT_EQ(info.id, FiltersNormalMap(info) ? v * kNormalMapFilterStride : v) << info.name;
+  }
+  // The geometric filters fit below the stride.
+  for (const VariantInfo& info : Variants()) {
+    if (!FiltersNormalMap(info)) {
+      EXPECT_LT(info.id, kNormalMapFilterStride) << info.name;
+    }
+  }
+}
+
+// The defaults of Params are the table's; each entry's defaults are
+// accepted by its own parameters' ranges.
+TEST(Catalogue, DefaultsLieInTheirRanges) {
+  const Params<double> defaults;
+  for (const ParamField& f : ParamFields()) EXPECT_TRUE(ValidateParam(f.name, defaults.*(f.member))) << f.name;
+  for (const VariantInfo& info : Variants())
+    for (const ParamInfo& p : info.params) EXPECT_TRUE(ValidateParam(p.name, p.default_value)) << info.name;
+  // The packing follows ParamFields' order.
+  Params<double> p;
+  int i = 0;
+  for (const ParamField& f : ParamFields()) p.*(f.member) = 0.5 + i++;
+  const auto slots = PackVariantParams(p);
+  for (int k = 0; k < kVariantParamCount; ++k) EXPECT_EQ(slots[k], 0.5f + k) << ParamFields()[k].name;
+}
 }  // namespace shimmer::shading
 
 namespace shimmer::shading {

@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::shading {
 namespace {

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "quadrature.h"
-#include "shimmer/renderer/sg.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/sg.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::shading {
 namespace {

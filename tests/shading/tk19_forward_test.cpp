@@ -8,7 +8,7 @@
 #include <cmath>
 #include <string>
 
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::shading {
 namespace {

@@ -13,8 +13,8 @@
 #include <utility>
 #include <vector>
 
-#include "shimmer/renderer/user_variant.h"
-#include "spirv_compiler.h"
+#include "shimmer/shading/user_variant.h"
+#include "shimmer/shading/spirv_compiler.h"
 
 namespace shimmer::shading {
 namespace {

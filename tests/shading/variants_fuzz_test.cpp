@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::shading {
 namespace {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "quadrature.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::shading {
 namespace {

@@ -15,7 +15,7 @@
 
 #include "shimmer/core/result.h"
 #include "shimmer/experiments/job.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 struct sqlite3;
 

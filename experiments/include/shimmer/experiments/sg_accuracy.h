@@ -1,5 +1,5 @@
 // How close seed 004's SG-light approximations (SpecularTermSgWarp and
-// SpecularTermAsgWarp, renderer/include/shimmer/renderer/sg.h) come to the
+// SpecularTermAsgWarp, renderer/include/shimmer/shading/sg.h) come to the
 // exact integral of the project's GGX BRDF against the SG light, on a flat
 // surface (normal +z, view in the xz plane, F0 0.04), per roughness and view
 // angle, over a 7 x 7 grid of light axes around the mirror direction.
@@ -25,7 +25,7 @@
 #include <nlohmann/json.hpp>
 
 #include "shimmer/core/result.h"
-#include "shimmer/renderer/sg.h"
+#include "shimmer/shading/sg.h"
 
 namespace shimmer::experiments {
 

@@ -12,7 +12,7 @@
 
 #include "shimmer/experiments/fit.h"
 #include "shimmer/core/result.h"
-#include "shimmer/renderer/user_variant.h"
+#include "shimmer/shading/user_variant.h"
 
 namespace shimmer::experiments {
 

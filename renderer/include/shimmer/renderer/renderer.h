@@ -14,8 +14,8 @@
 #include "shimmer/core/result.h"
 #include "shimmer/core/sequence_file.h"
 #include "shimmer/renderer/scene.h"
-#include "shimmer/renderer/shading.h"
-#include "shimmer/renderer/user_variant.h"
+#include "shimmer/shading/shading.h"
+#include "shimmer/shading/user_variant.h"
 
 namespace shimmer::render {
 
@@ -70,7 +70,7 @@ struct RenderSettings {
   // Mixed into every sample's random numbers: renders with different seeds are
   // independent estimates of the same frame. 0 is the default sequence.
   std::uint32_t seed = 0;
-  std::string variant_file;  // user variant GLSL defining userVariant(...) (shimmer/renderer/user_variant.h)
+  std::string variant_file;  // user variant GLSL defining userVariant(...) (shimmer/shading/user_variant.h)
   std::string device;        // substring of the Vulkan device name
   std::string preview_png;   // when set: a tone-mapped PNG of frame 0's beauty
   // Khronos validation layer (when installed); anything it reports fails the

@@ -15,7 +15,7 @@
 
 #include "shimmer/core/result.h"
 #include "shimmer/renderer/normal_map.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::scene {
 

@@ -1,45 +1,16 @@
 // Specular anti-aliasing filter variants: each maps the shading footprint to
 // a filtered slope-space NDF value and, where it widens roughness, the
 // effective roughness. Names, parameters, defaults and sources are listed for
-// users in variant_registry.cpp (`shimmer variants`).
+// users in shading/variant_table.json (`shimmer variants`).
 
-const int VARIANT_NONE = 0;
-const int VARIANT_VLACHOS15 = 1;
-const int VARIANT_TOKSVIG_QUAD = 2;
-const int VARIANT_K16_BECKMANN_RECT = 3;
-const int VARIANT_K16_BECKMANN_PARALLELOGRAM = 4;
-const int VARIANT_K16_GGX_RECT = 5;
-const int VARIANT_K16_GGX_RECT_STABLE = 6;
-const int VARIANT_K16_GGX_PROXY = 7;
-const int VARIANT_TK19 = 8;
-const int VARIANT_TK21 = 9;
-const int VARIANT_FILAMENT = 10;
-const int VARIANT_UNITY_HDRP = 11;
-const int VARIANT_GODOT = 12;
-const int VARIANT_K16_GGX_RECT_JACOBIAN = 13;
-// Seed 004's SG and ASG warps (sg.glsl), for SG lights only (sg_light.glsl).
-const int VARIANT_SG_WARP = 14;
-const int VARIANT_ASG_WARP = 15;
-const int VARIANT_SG_WARP_K16 = 16;
-const int VARIANT_ASG_WARP_K16 = 17;
-// Glint materials only (glints.glsl): the filtered biscale process, the
-// naive per-cell sparkle and the smooth global NDF.
-const int VARIANT_GLINTS_ZK16 = 18;
-const int VARIANT_GLINTS_NAIVE = 19;
-const int VARIANT_GLINTS_SMOOTH = 20;
-// Tokuyoshi and Kaplanyan 2019 for forward rendering: the kernel from the
-// derivatives of the projected half vector, non-axis-aligned and as the
-// bounding rectangle.
-const int VARIANT_TK19_FORWARD = 21;
-const int VARIANT_TK19_FORWARD_RECT = 22;
-const int VARIANT_COUNT = 23;
+// VARIANT_*, NMF_*, VariantParams and VARIANT_PARAMS_FROM_SLOTS come from
+// variant_table.glsl, generated from shading/variant_table.json.
 
-// A variant id is a geometric filter above plus NMF_STRIDE times a
-// normal-map filter (NMF_* of normal_map.glsl; 0 for the variants above):
+// A variant id is a geometric filter plus NMF_STRIDE times a normal-map
+// filter (NMF_*; 0 for the geometric filters alone):
 // `toksvig` is NMF_TOKSVIG * NMF_STRIDE, `tk19+toksvig` adds VARIANT_TK19.
 // The normal-map filter picks the shading normal and widens the material's
 // roughness (pixel.glsl); the geometric filter then filters that material.
-const int NMF_STRIDE = 32;
 int geometricVariant(int variant) { return variant - (variant / NMF_STRIDE) * NMF_STRIDE; }
 int normalMapFilterOf(int variant) { return variant / NMF_STRIDE; }
 
@@ -61,18 +32,6 @@ struct ShadingFootprint {
   vec3 dn_dy;
   vec3 dng_dx;   // derivatives of the geometric normal (engine presets use these)
   vec3 dng_dy;
-};
-
-// The union of all variants' parameters; each variant reads its own.
-struct VariantParams {
-  real fp_max;      // upper clamp on the slope-space footprint half-sides
-  real fp_min_cap;  // k16-ggx-rect: fp_min = min(alpha, fp_min_cap)
-  real sigma2;      // screen-space variance of the filtering kernel
-  real kappa;       // clamp on the kernel roughness
-  real nm_scale;    // normal-map filters: scale on the variance they add (pixel.glsl)
-  real curvature_scale;     // vlachos15: Unreal's NormalCurvatureToRoughness scale,
-  real curvature_bias;      // bias
-  real curvature_exponent;  // and exponent
 };
 
 struct FilteredNdf {

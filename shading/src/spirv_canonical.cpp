@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "shimmer/core/content_hash.h"
-#include "spirv_compiler.h"
+#include "shimmer/shading/spirv_compiler.h"
 
 namespace shimmer::shading {
 

@@ -1,6 +1,6 @@
 // User variant files: their shimmer-param declarations, parameter resolution
 // and the UserParams struct the kernel compiles before the file.
-#include "shimmer/renderer/user_variant.h"
+#include "shimmer/shading/user_variant.h"
 
 #include <cctype>
 #include <cmath>

@@ -3,7 +3,7 @@
 #include <charconv>
 #include <string>
 
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::shading {
 

@@ -1,6 +1,6 @@
 // The GLSL shading core compiled as C++, once per precision.
-#include "shimmer/renderer/sg.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/sg.h"
+#include "shimmer/shading/shading.h"
 
 #include <glm/glm.hpp>
 
@@ -46,13 +46,24 @@ static_assert(kPixelCandidates == glsl_f32::PIXEL_CANDIDATES);
 static_assert(int(GlintMode::kFiltered) == glsl_f32::GLINT_FILTERED && int(GlintMode::kPoint) == glsl_f32::GLINT_POINT &&
               int(GlintMode::kNaive) == glsl_f32::GLINT_NAIVE && int(GlintMode::kSmooth) == glsl_f32::GLINT_SMOOTH);
 static_assert(int(Ndf::kGlints) == glsl_f32::NDF_GLINTS);
-static_assert(kFirstSgVariant == glsl_f32::VARIANT_SG_WARP && kLastSgVariant == glsl_f32::VARIANT_ASG_WARP_K16);
+static_assert(kNormalMapFilterStride == glsl_f32::NMF_STRIDE);
 static_assert(int(LightType::kSg) == glsl_f32::LIGHT_SG && int(LightType::kSphere) == glsl_f32::LIGHT_SPHERE);
 static_assert(kSceneSpheres == glsl_f32::SCENE_SPHERES && kSceneCapsules == glsl_f32::SCENE_CAPSULES &&
               kScenePlanes == glsl_f32::SCENE_PLANES && kSceneBumps == glsl_f32::SCENE_BUMPS &&
               kSceneNormalMaps == glsl_f32::SCENE_NORMAL_MAPS);
 
 namespace {
+
+// The GLSL struct VariantParams (either precision) from Params, field by field
+// as the table lists them.
+template <class GlslParams, class T>
+GlslParams GlslVariantParams(const Params<T>& params) {
+  GlslParams p;
+#define SHIMMER_COPY_PARAM(name) p.name = params.name;
+  SHIMMER_VARIANT_PARAMS(SHIMMER_COPY_PARAM)
+#undef SHIMMER_COPY_PARAM
+  return p;
+}
 
 template <class T>
 struct Glsl;
@@ -136,15 +147,7 @@ FilteredNdf<T> EvaluateVariant(int id, Ndf ndf, glm::vec<2, T> alpha, const Foot
   f.dn_dy = footprint.dn_dy;
   f.dng_dx = footprint.dng_dx;
   f.dng_dy = footprint.dng_dy;
-  typename Glsl<T>::VariantParams p;
-  p.fp_max = params.fp_max;
-  p.fp_min_cap = params.fp_min_cap;
-  p.sigma2 = params.sigma2;
-  p.kappa = params.kappa;
-  p.nm_scale = params.nm_scale;
-  p.curvature_scale = params.curvature_scale;
-  p.curvature_bias = params.curvature_bias;
-  p.curvature_exponent = params.curvature_exponent;
+  const auto p = GlslVariantParams<typename Glsl<T>::VariantParams>(params);
   auto r = Glsl<T>::Eval(id, static_cast<int>(ndf), alpha, f, p);
   return {r.slope_density, r.density, r.alpha_eff};
 }
@@ -296,14 +299,7 @@ auto FlatSgPoint(const Sg<T>& light, glm::vec<3, T> normal, T alpha, glm::vec<3,
   p.f.dhpp_dx = p.f.dhpp_dy = p.f.dh_dx = p.f.dh_dy = glm::vec<2, T>(0);
   p.f.n = normal;
   p.f.dn_dx = p.f.dn_dy = p.f.dng_dx = p.f.dng_dy = glm::vec<3, T>(0);
-  p.vp.fp_max = 1;
-  p.vp.fp_min_cap = T(0.1);
-  p.vp.sigma2 = 0;
-  p.vp.kappa = 0;
-  p.vp.nm_scale = 1;
-  p.vp.curvature_scale = 1;
-  p.vp.curvature_bias = 0;
-  p.vp.curvature_exponent = T(0.333);
+  p.vp = GlslVariantParams<typename Glsl<T>::VariantParams>(Params<T>{});  // variant 0 reads none of them
   return p;
 }
 }  // namespace
@@ -482,15 +478,7 @@ PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc&
   m.albedo = material.albedo;
   m.glintAlphaL = material.glint_alpha_l;
   m.glintDensity = material.glint_density;
-  VariantParams p;
-  p.fp_max = params.fp_max;
-  p.fp_min_cap = params.fp_min_cap;
-  p.sigma2 = params.sigma2;
-  p.kappa = params.kappa;
-  p.nm_scale = params.nm_scale;
-  p.curvature_scale = params.curvature_scale;
-  p.curvature_bias = params.curvature_bias;
-  p.curvature_exponent = params.curvature_exponent;
+  const auto p = GlslVariantParams<VariantParams>(params);
   PixelResult r = renderPixelOracle(c, l, m, variant, static_cast<int>(derivatives), p, px);
   g_scene_words = {};
   PixelOracle o;
@@ -506,52 +494,6 @@ PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc&
   o.derivatives = {r.f.hpp,    r.f.dhpp_dx, r.f.dhpp_dy, r.f.n,    r.f.dn_dx,
                    r.f.dn_dy, r.f.dng_dx,  r.f.dng_dy,  r.f.dh_dx, r.f.dh_dy};
   return o;
-}
-
-bool CatalogueMatchesGlsl() {
-  using namespace glsl_f64;
-  const std::pair<std::string_view, int> expected[] = {
-      {"none", VARIANT_NONE},
-      {"vlachos15", VARIANT_VLACHOS15},
-      {"toksvig-quad", VARIANT_TOKSVIG_QUAD},
-      {"k16-beckmann-rect", VARIANT_K16_BECKMANN_RECT},
-      {"k16-beckmann-parallelogram", VARIANT_K16_BECKMANN_PARALLELOGRAM},
-      {"k16-ggx-rect", VARIANT_K16_GGX_RECT},
-      {"k16-ggx-rect-stable", VARIANT_K16_GGX_RECT_STABLE},
-      {"k16-ggx-rect-jacobian", VARIANT_K16_GGX_RECT_JACOBIAN},
-      {"k16-ggx-proxy", VARIANT_K16_GGX_PROXY},
-      {"tk19", VARIANT_TK19},
-      {"tk19-forward", VARIANT_TK19_FORWARD},
-      {"tk19-forward-rect", VARIANT_TK19_FORWARD_RECT},
-      {"tk21", VARIANT_TK21},
-      {"filament", VARIANT_FILAMENT},
-      {"unity-hdrp", VARIANT_UNITY_HDRP},
-      {"godot", VARIANT_GODOT},
-      {"sg-warp", VARIANT_SG_WARP},
-      {"asg-warp", VARIANT_ASG_WARP},
-      {"sg-warp-k16", VARIANT_SG_WARP_K16},
-      {"asg-warp-k16", VARIANT_ASG_WARP_K16},
-      {"glints-zk16", VARIANT_GLINTS_ZK16},
-      {"glints-naive", VARIANT_GLINTS_NAIVE},
-      {"glints-smooth", VARIANT_GLINTS_SMOOTH},
-      {"nm-point", NMF_POINT * NMF_STRIDE},
-      {"nm-mip", NMF_MIP * NMF_STRIDE},
-      {"toksvig", NMF_TOKSVIG * NMF_STRIDE},
-      {"toksvig-bp", NMF_TOKSVIG_BP * NMF_STRIDE},
-      {"toksvig-map", NMF_TOKSVIG_MAP * NMF_STRIDE},
-      {"lean", NMF_LEAN * NMF_STRIDE},
-      {"clean", NMF_CLEAN * NMF_STRIDE},
-      {"vmf", NMF_VMF * NMF_STRIDE},
-      {"unity-hdrp-nm", NMF_HDRP * NMF_STRIDE},
-  };
-  if (NMF_STRIDE != kNormalMapFilterStride || VARIANT_COUNT > NMF_STRIDE) return false;
-  if (Variants().size() != std::size(expected) || std::size(expected) != size_t(VARIANT_COUNT + NMF_COUNT - 1))
-    return false;
-  for (const auto& [name, id] : expected) {
-    const VariantInfo* info = FindVariant(name);
-    if (!info || info->id != id) return false;
-  }
-  return true;
 }
 
 }  // namespace shimmer::shading

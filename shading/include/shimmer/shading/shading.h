@@ -1,4 +1,4 @@
-// The shading core seen from C++: the GLSL filter math of renderer/shading,
+// The shading core seen from C++: the GLSL filter math of shading/glsl,
 // compiled for float and double, plus the variant catalogue.
 #pragma once
 
@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "shimmer/core/result.h"
+#include "shimmer/shading/variant_table.h"  // Params<T>, generated from shading/variant_table.json
 
 #include <optional>
 #include <span>
@@ -57,19 +58,6 @@ struct Footprint {
 // (variants.glsl), slope and derivatives capped as the core caps them.
 template <class T>
 Footprint<T> WithChainedProjection(Footprint<T> f);
-
-template <class T>
-struct Params {
-  T fp_max = 1;
-  T fp_min_cap = T(0.1);
-  T sigma2 = T(0.25);
-  T kappa = T(0.18);
-  T nm_scale = 1;  // normal-map filters: scale on the variance they add
-  // vlachos15 as Unreal exposes it: sat(S pow(curvature, E) + B).
-  T curvature_scale = 1;
-  T curvature_bias = 0;
-  T curvature_exponent = T(0.333);
-};
 
 template <class T>
 struct FilteredNdf {
@@ -248,15 +236,19 @@ struct ParamInfo {
   std::string_view meaning;
 };
 
+// One entry of shading/variant_table.json (its "about" says what each field
+// means).
 struct VariantInfo {
   std::string_view name;
-  int id;  // VARIANT_* in variants.glsl
+  int id;  // VARIANT_* (+ NMF_STRIDE times NMF_*) of the generated variant_table.glsl
   std::string_view summary;
   std::string_view source;
   std::vector<ParamInfo> params;
-  bool widens_roughness;
-  bool ggx_only;
-  bool glints = false;  // shades glint materials (glints.glsl), and only those
+  bool widens_roughness = false;
+  bool ggx_only = false;
+  bool glints = false;           // shades glint materials (glints.glsl), and only those
+  bool reads_footprint = false;  // its pixels read screen-space derivatives
+  bool sg_light = false;         // shades SG lights only (seed 004's warps)
 };
 
 std::span<const VariantInfo> Variants();
@@ -265,23 +257,21 @@ std::span<const VariantInfo> Variants();
 // kept for the process (the pointer stays valid).
 const VariantInfo* FindVariant(std::string_view name);
 // Variant ids: a geometric filter (VARIANT_* < kNormalMapFilterStride) plus
-// kNormalMapFilterStride times a normal-map filter (NMF_* of normal_map.glsl).
-inline constexpr int kNormalMapFilterStride = 32;
+// kNormalMapFilterStride times a normal-map filter (NMF_*).
 inline int GeometricVariantId(int id) { return id % kNormalMapFilterStride; }
 inline int NormalMapFilterId(int id) { return id / kNormalMapFilterStride; }
 // Whether the variant filters a normal map (and so needs a scene that has one).
 inline bool FiltersNormalMap(const VariantInfo& info) { return NormalMapFilterId(info.id) != 0; }
-// Seed 004's SG and ASG warps (VARIANT_SG_WARP .. VARIANT_ASG_WARP_K16)
-// shade SG lights only; every other variant shades any light.
-inline constexpr int kFirstSgVariant = 14, kLastSgVariant = 17;
-bool NeedsSgLight(const VariantInfo& info);
+// Seed 004's SG and ASG warps shade SG lights only; every other variant
+// shades any light.
+inline bool NeedsSgLight(const VariantInfo& info) { return info.sg_light; }
 // Why the variant cannot shade a material of this NDF, or nothing: glint
 // variants need a glint material, which takes none (and supersample-N, its
 // samples being none's) and the glint variants only.
 std::optional<std::string> MaterialMismatch(const VariantInfo& info, Ndf ndf);
 // Whether the variant's result depends on the shading footprint (none and the
 // unfiltered SG warps do not: one derivative source is enough for them).
-bool ReadsFootprint(const VariantInfo& info);
+inline bool ReadsFootprint(const VariantInfo& info) { return info.reads_footprint; }
 
 // The variant parameters, named once: what a variant may read, and the
 // values it accepts.
@@ -307,12 +297,6 @@ Result<Params<double>> ResolveParams(const VariantInfo& info,
 // The GLSL sources of the shading core, by file name (core.glsl first).
 std::span<const std::pair<std::string_view, std::string_view>> GlslSources();
 
-}  // namespace shimmer::shading
-
-namespace shimmer::shading {
-// True when every catalogue entry's id equals its VARIANT_* constant in
-// variants.glsl (checked by a test).
-bool CatalogueMatchesGlsl();
 }  // namespace shimmer::shading
 
 namespace shimmer::shading {

@@ -1,4 +1,4 @@
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::shading {
 namespace embedded {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "shimmer/core/result.h"
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::shading {
 

@@ -1,4 +1,4 @@
-// Spherical Gaussians of the shading core (renderer/shading/sg.glsl) seen
+// Spherical Gaussians of the shading core (shading/glsl/sg.glsl) seen
 // from C++, compiled for float and double: the SG / ASG algebra and the GGX
 // specular response to an SG light of seeds/004_ad807e344d5111d8.txt.
 // sg.glsl says what each function approximates; docs/renderer.md has the

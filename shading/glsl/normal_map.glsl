@@ -21,18 +21,8 @@
 vec4 sceneWord(int i) { return vec4(real(0), real(0), real(0), real(0)); }
 #endif
 
-// Normal-map filters: the part of a variant id above NMF_STRIDE (variants.glsl).
-const int NMF_NONE = 0;        // level 0, bilinear: the surface the reference sees, at the pixel centre
-const int NMF_POINT = 1;       // nm-point: level 0, nearest texel (no mip maps, no filtering)
-const int NMF_MIP = 2;         // nm-mip: the mipped normal renormalised, roughness kept
-const int NMF_TOKSVIG = 3;     // toksvig: alpha^2 += 2 sigma^2, sigma^2 = (1 - |Na|) / |Na|
-const int NMF_TOKSVIG_BP = 4;  // toksvig-bp: the seed's Blinn-Phong form, power f_t s
-const int NMF_TOKSVIG_MAP = 5; // toksvig-map: f_t baked per level, converted from the fixed power
-const int NMF_LEAN = 6;        // lean: B and the diagonal of M - B B^T
-const int NMF_CLEAN = 7;       // clean: B and one variance
-const int NMF_VMF = 8;         // vmf: Han et al. 2007, alpha^2 += 2 / kappa
-const int NMF_HDRP = 9;        // unity-hdrp-nm: HDRP's texture normal filtering
-const int NMF_COUNT = 10;
+// Normal-map filters (NMF_*): the part of a variant id above NMF_STRIDE,
+// generated from shading/variant_table.json (variant_table.glsl).
 
 // Hardware anisotropic filtering takes at most this many probes along the
 // footprint's major axis (a common driver maximum is 16; 8 keeps the cost of

@@ -1,4 +1,4 @@
-#include "spirv_compiler.h"
+#include "shimmer/shading/spirv_compiler.h"
 
 #include <glslang/Public/ResourceLimits.h>
 #include <glslang/Public/ShaderLang.h>
@@ -12,7 +12,7 @@
 
 #include "shimmer/core/content_hash.h"
 
-#include "shimmer/renderer/shading.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::shading {
 

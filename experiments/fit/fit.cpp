@@ -10,47 +10,6 @@ namespace shimmer::experiments {
 
 namespace {
 
-// J on u = log p, each distinct u evaluated once (a rendered J costs seconds).
-class MemoObjective {
- public:
-  MemoObjective(const std::function<double(double)>& objective, Fit1D* fit) : objective_(objective), fit_(fit) {}
-  double operator()(double u) {
-    // Points that differ only by rounding (u + h - h) are the same render.
-    const long long key = std::llround(u * 1e6);
-    if (auto it = memo_.find(key); it != memo_.end()) return it->second;
-    const double p = std::exp(u);
-    const double j = objective_(p);
-    fit_->samples.push_back({p, j});
-    ++fit_->evaluations;
-    return memo_[key] = j;
-  }
-
- private:
-  const std::function<double(double)>& objective_;
-  Fit1D* fit_;
-  std::map<long long, double> memo_;
-};
-
-// Newton on the smoothed gradient: the residual is the central difference
-// g(u) = (J(u+h) - J(u-h)) / 2h, its derivative the second difference, and
-// Ceres drives g to zero inside the sweep's bracket around the best point.
-// h is a fixed step in log p (10 % in p), wide against the aliasing noise of
-// a rendered J, which a small step would turn into meaningless slopes.
-class SmoothedGradient : public ceres::SizedCostFunction<1, 1> {
- public:
-  SmoothedGradient(MemoObjective* j, double h) : j_(j), h_(h) {}
-  bool Evaluate(double const* const* u, double* residual, double** jacobian) const override {
-    const double jm = (*j_)(u[0][0] - h_), j0 = (*j_)(u[0][0]), jp = (*j_)(u[0][0] + h_);
-    residual[0] = (jp - jm) / (2 * h_);
-    if (jacobian && jacobian[0]) jacobian[0][0] = (jp - 2 * j0 + jm) / (h_ * h_);
-    return std::isfinite(residual[0]) && std::isfinite(j0);
-  }
-
- private:
-  MemoObjective* j_;
-  double h_;
-};
-
 struct LogPowerResidual {
   double log_alpha, log_value;
   template <class T>
@@ -100,10 +59,13 @@ class MemoObjectiveND {
   std::map<std::vector<long long>, double> memo_;
 };
 
-// Newton on the smoothed gradient, as in 1-D: the residual is the central
+// Newton on the smoothed gradient: the residual is the central
 // difference gradient g_i(u) = (J(u + h_i e_i) - J(u - h_i e_i)) / 2 h_i, its
 // Jacobian the difference Hessian (the mixed terms from the four corners
 // u +- h_i e_i +- h_j e_j), and Ceres drives g to zero inside the grid cell.
+// h is a fixed step (10 % in p on logarithmic axes), wide against the
+// aliasing noise of a rendered J, which a small step would turn into
+// meaningless slopes.
 class SmoothedGradientND : public ceres::CostFunction {
  public:
   SmoothedGradientND(MemoObjectiveND* j, std::vector<double> h) : j_(j), h_(std::move(h)) {
@@ -223,43 +185,20 @@ FitND MinimizeND(const std::function<double(const std::vector<double>&)>& object
   return fit;
 }
 
+// The one-parameter search is the joint one on a single logarithmic axis
+// (same sweep, same bracket, same Ceres refinement, same memo).
 Fit1D Minimize1D(const std::function<double(double)>& objective, double lo, double hi, int sweep_points,
                  const std::vector<double>& extra_points) {
+  std::vector<std::vector<double>> extra;
+  for (double p : extra_points) extra.push_back({p});
+  const FitND nd = MinimizeND([&](const std::vector<double>& p) { return objective(p[0]); }, {FitAxis{lo, hi}},
+                              sweep_points, extra);
   Fit1D fit;
-  MemoObjective j(objective, &fit);
-  const double ulo = std::log(lo), uhi = std::log(hi);
-  std::vector<double> points;
-  for (int i = 0; i < sweep_points; ++i)
-    points.push_back(sweep_points == 1 ? ulo : ulo + (uhi - ulo) * double(i) / (sweep_points - 1));
-  for (double p : extra_points)
-    if (p >= lo && p <= hi) points.push_back(std::log(p));
-  std::sort(points.begin(), points.end());
-  int best = 0;
-  for (int i = 0; i < int(points.size()); ++i)
-    if (j(points[i]) < j(points[best])) best = i;
-  fit.best = std::exp(points[best]);
-  fit.objective = j(points[best]);
-
-  // Refine inside the bracket of the best point's neighbours, which holds a
-  // local minimum of the swept samples, with the difference steps kept
-  // inside [lo, hi].
-  const double h = 0.1;
-  const double blo = std::max(best > 0 ? points[best - 1] : ulo, ulo + h);
-  const double bhi = std::min(best + 1 < int(points.size()) ? points[best + 1] : uhi, uhi - h);
-  if (blo < bhi) {
-    double u = std::clamp(points[best], blo, bhi);
-    ceres::Problem problem;
-    problem.AddResidualBlock(new SmoothedGradient(&j, h), nullptr, &u);
-    problem.SetParameterLowerBound(&u, 0, blo);
-    problem.SetParameterUpperBound(&u, 0, bhi);
-    ceres::Solver::Summary summary;
-    ceres::Solve(RefinementOptions(), &problem, &summary);  // an iteration: up to three renders a shot
-    j(u);  // Ceres' answer joins the samples
-  }
-  // Every sample is a candidate (Ceres' difference points may be the lowest);
-  // any lower than the sweep's best came from the refinement.
-  for (const auto& [p, v] : fit.samples)
-    if (v < fit.objective) fit.best = p, fit.objective = v, fit.ceres_improved = true;
+  fit.best = nd.best.at(0);
+  fit.objective = nd.objective;
+  fit.evaluations = nd.evaluations;
+  fit.ceres_improved = nd.ceres_improved;
+  for (const auto& [p, j] : nd.samples) fit.samples.push_back({p.at(0), j});
   return fit;
 }
 

@@ -100,13 +100,28 @@ void Overview(Document& doc, const std::vector<const Group*>& included, const st
 }
 
 // A ratio to `none` with both intervals' worst cases as its interval.
-// A cost ratio with the interval of its paired repetitions, where timed so.
+// A cost ratio with the interval of its paired repetitions, where timed so:
+// "≈ `none`" when the interval holds 1.
 std::string CostText(const std::optional<BenchmarkCost>& cost) {
   if (!cost) return "n/a";
+  if (cost->variant == "none") return "1";
   std::string text = Fmt(cost->ratio_to_none, "%.2f") + "×";
-  if (cost->ratio_hi > 0 && cost->variant != "none")
+  if (cost->ratio_hi > 0) {
     text += " [" + Fmt(cost->ratio_lo, "%.2f") + ", " + Fmt(cost->ratio_hi, "%.2f") + "]";
+    if (cost->ratio_lo <= 1 && cost->ratio_hi >= 1) text += " ≈ `none`";
+  }
   return text;
+}
+
+// The kernel's static instruction count as a ratio to its batch's `none`,
+// with the transcendental operations it adds: a cost no device's timing
+// noise touches.
+std::string InstructionText(const std::optional<BenchmarkCost>& cost) {
+  if (!cost || cost->kernel.Total() == 0 || cost->none_kernel.Total() == 0) return "n/a";
+  if (cost->variant == "none") return "1 (" + std::to_string(cost->kernel.Total()) + ")";
+  const int more = cost->kernel.transcendental - cost->none_kernel.transcendental;
+  return Fmt(double(cost->kernel.Total()) / cost->none_kernel.Total(), "%.2f") + "× (" + (more >= 0 ? "+" : "") +
+         std::to_string(more) + " transc.)";
 }
 
 std::string RatioWithInterval(double value, Interval ci, double none_value, Interval none_ci) {
@@ -152,7 +167,9 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
     cost = "Cost: the external sequences' own, on " + bench->device + ", as a ratio to a `none` timed there.";
   else if (bench_devices.size() == 1)
     cost = "Cost: benchmark on " + bench->device + " at " + std::to_string(bench->width) + "×" +
-           std::to_string(bench->height) + ", ratio to `none` in the same batch.";
+           std::to_string(bench->height) + ", ratio to `none` in the same batch (on lavapipe: CPU time); "
+           "beside it the kernel's static instruction count, ratio to `none`'s, and the transcendental "
+           "operations it adds (docs/method.md, Cost).";
   else
     cost = "Cost: each row's ratio to `none` on its own benchmark device (report.csv, column bench_device).";
   doc.Paragraph(reference + " " + cost +
@@ -182,11 +199,11 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
                      RatioWithInterval(e.tv_err, e.tv_err_ci, base.tv_err, base.tv_err_ci),
                      RatioWithInterval(e.spatial, e.spatial_ci, base.spatial, base.spatial_ci),
                      WithInterval(e.energy_bias, e.energy_ci, "%+.3f"),
-                     CostText(r->cost), verdict});
+                     CostText(r->cost), InstructionText(r->cost), verdict});
   }
   doc.Table({"variant", "joint error [95 %]", "tv_err, ratio to `none` [95 %]",
-             "spatial error, ratio to `none` [95 %]", "energy bias, fraction [95 %]", "cost, ratio to `none` [95 %]",
-             "verdict"},
+             "spatial error, ratio to `none` [95 %]", "energy bias, fraction [95 %]", "time, ratio to `none` [95 %]",
+             "instructions, ratio to `none`", "verdict"},
             cells);
   // Every other column, for report.html (report.csv has them all too).
   const Costs costs = CostsOf(group);
@@ -440,8 +457,12 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
       "over frames and pixels); a ratio's interval combines the two intervals' worst cases. Region: the pixels "
       "measured (`highlight`: the reference's highlight mask). A reference passes its convergence check when "
       "`none` measured against it at N and at 2N samples per axis agrees within the spec's tolerances. Cost: "
-      "dedicated benchmark renders, variants interleaved in one batch per device, median time per frame as a "
-      "ratio to `none` of the same batch; on lavapipe this is CPU time. Pareto plots: no other variant of the "
+      "dedicated benchmark renders, variants interleaved in one batch per device (the order reversed every "
+      "repetition), the geometric mean of the paired per-repetition time ratios to `none` of the same batch "
+      "with a Student-t 95 % interval, repetitions added until it is within ±3 % (or 60 were timed); on "
+      "lavapipe this is CPU time. Beside it, a cost no timing noise touches: the kernel's static instruction "
+      "count (its canonical SPIR-V, every function inlined) as a ratio to `none`'s, and the transcendental "
+      "operations it adds. Pareto plots: no other variant of the "
       "table is both cheaper and lower in that error. Medians and quartiles interpolate linearly between order "
       "statistics.");
   // The table of contents: every section after the answer.

@@ -383,12 +383,12 @@ TEST(ReportTables, VerdictColumnFollowsTheDecisionRule) {
   const std::vector<Group> groups = GroupRows(rows);
   const std::string md = ToMarkdown(BuildDocument(groups, "t", rows.size()));
   // [0.16, 0.24] over [0.96, 1.04]: the ratio's interval is [0.154, 0.25].
-  EXPECT_NE(md.find("| `tk21` | 0.1 | 0.2 [0.154, 0.25] | 1 | +0.000 | n/a | **better**, lowest joint error |"),
+  EXPECT_NE(md.find("| `tk21` | 0.1 | 0.2 [0.154, 0.25] | 1 | +0.000 | n/a | n/a | **better**, lowest joint error |"),
             std::string::npos)
       << md;
-  EXPECT_NE(md.find("| `toksvig-quad` | 0.1 | 0.98 [0.904, 1.06] | 1 | +0.000 | n/a | ≈ none |"), std::string::npos)
+  EXPECT_NE(md.find("| `toksvig-quad` | 0.1 | 0.98 [0.904, 1.06] | 1 | +0.000 | n/a | n/a | ≈ none |"), std::string::npos)
       << md;
-  EXPECT_NE(md.find("| `none` | 0.1 | 1 [0.923, 1.08] | 1 | +0.000 | n/a | baseline |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| `none` | 0.1 | 1 [0.923, 1.08] | 1 | +0.000 | n/a | n/a | baseline |"), std::string::npos) << md;
 }
 
 TEST(ReportOverview, UnconvergedShotIsLeftOutAndListed) {

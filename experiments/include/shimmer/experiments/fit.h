@@ -18,9 +18,10 @@ struct Fit1D {
   std::vector<std::pair<double, double>> samples;  // (p, J(p)) of every evaluation
 };
 
-// Minimises J on [lo, hi] (lo > 0) on u = log p: a log-spaced sweep of
-// `sweep_points` plus `extra_points`, then Ceres inside the bracket of the
-// best swept point's neighbours, solving g(u) = 0 for the central-difference
+// Minimises J on [lo, hi] (lo > 0) on u = log p: MinimizeND on one
+// logarithmic axis. A log-spaced sweep of `sweep_points` plus `extra_points`,
+// then Ceres within one sweep step either side of the best point, solving
+// g(u) = 0 for the central-difference
 // gradient g with a fixed step of 0.1 in u (10 % in p), large against the
 // aliasing noise of a rendered J. The lowest J evaluated wins, so the result
 // is never worse than any swept point. Each distinct p is evaluated once.

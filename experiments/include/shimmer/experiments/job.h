@@ -26,7 +26,11 @@ struct Job {
   std::string material;
   std::string camera;
   std::string variant;
-  std::map<std::string, double> params;  // only the values the spec sweeps; ids resolve the defaults
+  // The values the spec sweeps, and nothing else: the defaults resolve from
+  // the variant table when the job renders, and the id hashes the resolved
+  // values the kernel is given (its push constants), so a default that
+  // changes moves the id.
+  std::map<std::string, double> params;
   std::string derivatives;
   // A user variant: its file (not part of the id: the content is) and the
   // hash of its content. Its params hold every declared parameter.

@@ -213,18 +213,30 @@ ShadingFootprint quadFootprint(SurfaceSample s, SurfaceSample x0, SurfaceSample 
   return f;
 }
 
-// The quad's uv differences: what a pixel shader's texture fetch takes as
-// its footprint. u wraps on spheres and capsules.
+// A uv footprint: the change of uv per pixel along screen x and y, what a
+// texture fetch takes as its footprint (the normal map's and the glints').
+struct UvFootprint {
+  vec2 dx;
+  vec2 dy;
+};
+
+// From the quad's uv differences dx, dy; u wraps (period > 0) on spheres and
+// capsules.
 real wrappedDifference(real d, real period) { return period > real(0) ? d - period * floor(d / period + real(0.5)) : d; }
+UvFootprint quadUvFootprint(vec2 dx, vec2 dy, real period) {
+  UvFootprint f;
+  f.dx = vec2(wrappedDifference(dx.x, period), dx.y);
+  f.dy = vec2(wrappedDifference(dy.x, period), dy.y);
+  return f;
+}
 
 NormalMapFilter quadNormalMapFilter(int mode, SurfaceSample s, SurfaceSample x0, SurfaceSample x1, SurfaceSample y0,
                                     SurfaceSample y1) {
   NormalMapFilter nf;
   nf.mode = mode;
-  vec2 dx = x1.uv - x0.uv;
-  vec2 dy = y1.uv - y0.uv;
-  nf.duvdx = vec2(wrappedDifference(dx.x, s.uPeriod), dx.y);
-  nf.duvdy = vec2(wrappedDifference(dy.x, s.uPeriod), dy.y);
+  UvFootprint uv = quadUvFootprint(x1.uv - x0.uv, y1.uv - y0.uv, s.uPeriod);
+  nf.duvdx = uv.dx;
+  nf.duvdy = uv.dy;
   return nf;
 }
 
@@ -272,15 +284,23 @@ vec3 surfaceDifferential(SurfaceSample s, Ray r, vec3 dd) {
 }
 
 // The uv footprint from the ray differentials: d uv = (grad u . dp, grad v . dp).
+UvFootprint analyticUvFootprint(SurfaceSample s, Ray r, Prim pr) {
+  UvGradient g = surfaceUvGradient(pr, s.p);
+  vec3 dpx = surfaceDifferential(s, r, r.ddx);
+  vec3 dpy = surfaceDifferential(s, r, r.ddy);
+  UvFootprint f;
+  f.dx = vec2(dot(g.du, dpx), dot(g.dv, dpx));
+  f.dy = vec2(dot(g.du, dpy), dot(g.dv, dpy));
+  return f;
+}
+
 NormalMapFilter analyticNormalMapFilter(int mode, SurfaceSample s, Ray r) {
   NormalMapFilter nf = levelZeroFilter();
   nf.mode = mode;
   if (s.prim < 0) return nf;
-  UvGradient g = surfaceUvGradient(loadPrim(s.prim), s.p);
-  vec3 dpx = surfaceDifferential(s, r, r.ddx);
-  vec3 dpy = surfaceDifferential(s, r, r.ddy);
-  nf.duvdx = vec2(dot(g.du, dpx), dot(g.dv, dpx));
-  nf.duvdy = vec2(dot(g.du, dpy), dot(g.dv, dpy));
+  UvFootprint uv = analyticUvFootprint(s, r, loadPrim(s.prim));
+  nf.duvdx = uv.dx;
+  nf.duvdy = uv.dy;
   return nf;
 }
 
@@ -349,10 +369,11 @@ GlintFootprint quadGlintFootprint(SurfaceSample s, SurfaceSample x0, SurfaceSamp
   Prim pr = loadPrim(s.prim);
   vec2 scale = glintUvScale(pr);
   real period = surfaceUPeriod(pr) * scale.x;
-  vec2 dx = (surfaceUv(pr, x1.p) - surfaceUv(pr, x0.p)) * scale;
-  vec2 dy = (surfaceUv(pr, y1.p) - surfaceUv(pr, y0.p)) * scale;
-  g.duvdx = vec2(wrappedDifference(dx.x, period), dx.y);
-  g.duvdy = vec2(wrappedDifference(dy.x, period), dy.y);
+  // The neighbours' points in the centre primitive's uv (they may lie on another primitive).
+  UvFootprint uv = quadUvFootprint((surfaceUv(pr, x1.p) - surfaceUv(pr, x0.p)) * scale,
+                                   (surfaceUv(pr, y1.p) - surfaceUv(pr, y0.p)) * scale, period);
+  g.duvdx = uv.dx;
+  g.duvdy = uv.dy;
   return g;
 }
 
@@ -362,11 +383,9 @@ GlintFootprint analyticGlintFootprint(SurfaceSample s, Ray r) {
   if (s.prim < 0) return g;
   Prim pr = loadPrim(s.prim);
   vec2 scale = glintUvScale(pr);
-  UvGradient grad = surfaceUvGradient(pr, s.p);
-  vec3 dpx = surfaceDifferential(s, r, r.ddx);
-  vec3 dpy = surfaceDifferential(s, r, r.ddy);
-  g.duvdx = vec2(dot(grad.du, dpx), dot(grad.dv, dpx)) * scale;
-  g.duvdy = vec2(dot(grad.du, dpy), dot(grad.dv, dpy)) * scale;
+  UvFootprint uv = analyticUvFootprint(s, r, pr);
+  g.duvdx = uv.dx * scale;
+  g.duvdy = uv.dy * scale;
   return g;
 }
 
@@ -503,7 +522,7 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
   FilteredCentre fc;
   Ray ray = cameraRay(c, pixelCentre(px));
   r.s = traceRay(ray, light);
-  GlintFootprint gf = pointGlintFootprint(r.s);
+  GlintFootprint gf;  // set below for glint materials only
   if (r.s.prim < 0 || derivMode == DERIV_ANALYTIC) {
     if (nmf != NMF_NONE) {
       nf = analyticNormalMapFilter(nmf, r.s, ray);

@@ -1,0 +1,282 @@
+// Scene files: JSON scenes (docs/scenes.md) read into a Scene, every problem
+// named with the file and the JSON Pointer of the key it is about.
+#include "shimmer/renderer/scene.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+
+#include "shimmer/core/number_text.h"
+
+namespace shimmer::scene {
+
+namespace {
+
+// Reads the optional fields of one JSON object; the first problem is kept,
+// worded with the file and the JSON Pointer (RFC 6901) of the key or object
+// it is about: "scene.json: /primitives/2/radius: must be a number > 0".
+class FieldReader {
+ public:
+  // `pointer`: the object's JSON Pointer, "" for the top level.
+  FieldReader(const nlohmann::json& object, std::string source, std::string pointer)
+      : j_(object), source_(std::move(source)), pointer_(std::move(pointer)) {}
+
+  // `allowed`: every key the object may have; another is reported (a typo
+  // would otherwise be ignored silently).
+  FieldReader& Keys(std::initializer_list<const char*> allowed) {
+    for (const auto& [key, value] : j_.items()) {
+      bool known = false;
+      for (const char* a : allowed) known = known || key == a;
+      if (!known) {
+        std::string list;
+        for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+        FailKey(key, "unknown key (expected: " + list + ")");
+        break;
+      }
+    }
+    return *this;
+  }
+  FieldReader& Require(const char* key) {
+    if (!j_.contains(key)) FailKey(key, "is required");
+    return *this;
+  }
+  FieldReader& Vec3(const char* key, glm::dvec3* out) {
+    if (!ok() || !j_.contains(key)) return *this;
+    const auto& v = j_[key];
+    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
+      return FailKey(key, "must be an array of 3 numbers");
+    const glm::dvec3 x{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+    if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z) || glm::length(x) > kMaxCoordinate)
+      return FailKey(key, "must be finite, at most 1e6 from the origin");
+    *out = x;
+    return *this;
+  }
+  // A number in [lo, hi] (or (lo, hi] when `open_lo`).
+  FieldReader& Number(const char* key, double* out, double lo, double hi, bool open_lo = false) {
+    if (!ok() || !j_.contains(key)) return *this;
+    const auto& v = j_[key];
+    const double x = v.is_number() ? v.get<double>() : std::nan("");
+    if (!v.is_number() || !std::isfinite(x) || x < lo || x > hi || (open_lo && x == lo)) {
+      std::string range =
+          open_lo && lo == 0 ? "> 0" : (open_lo ? "in (" : "in [") + NumberText(lo) + ", " + NumberText(hi) + "]";
+      if (open_lo && lo == 0) range += " and <= " + NumberText(hi);
+      return FailKey(key, "must be a number " + range);
+    }
+    *out = x;
+    return *this;
+  }
+  FieldReader& String(const char* key, std::string* out) {
+    if (!ok() || !j_.contains(key)) return *this;
+    if (!j_[key].is_string()) return FailKey(key, "must be a string");
+    *out = j_[key].get<std::string>();
+    return *this;
+  }
+  // A problem with the value of `key`.
+  FieldReader& FailKey(const std::string& key, const std::string& problem) {
+    return FailAt(pointer_ + "/" + PointerToken(key), problem);
+  }
+  // A problem with the object as a whole.
+  FieldReader& Fail(const std::string& problem) { return FailAt(pointer_.empty() ? "/" : pointer_, problem); }
+  // The first problem another reader (of a nested object) found, already worded.
+  FieldReader& Adopt(const std::string& error) {
+    if (error_.empty()) error_ = error;
+    return *this;
+  }
+  bool ok() const { return error_.empty(); }
+  const std::string& error() const { return error_; }
+
+  // RFC 6901 escaping of one reference token: "~" -> "~0", "/" -> "~1".
+  static std::string PointerToken(const std::string& key) {
+    std::string out;
+    for (char c : key) out += c == '~' ? "~0" : (c == '/' ? "~1" : std::string(1, c));
+    return out;
+  }
+
+ private:
+  FieldReader& FailAt(const std::string& pointer, const std::string& problem) {
+    if (error_.empty()) error_ = source_ + ": " + pointer + ": " + problem;
+    return *this;
+  }
+
+  const nlohmann::json& j_;
+  std::string source_, pointer_;
+  std::string error_;
+};
+
+}  // namespace
+
+namespace {
+
+// Total texel words of a scene's maps: word indices are floats in the
+// kernel, exact below 2^24.
+constexpr std::size_t kMaxNormalMapWords = std::size_t(1) << 24;
+
+// "normal_map": {"file": F | "procedural": NAME, "scale": [u, v], "strength": s}
+// on any primitive; a relative file is found beside the scene file.
+void ReadNormalMap(FieldReader& r, const nlohmann::json& pj, const std::string& source, const std::string& pointer,
+                   Primitive* p) {
+  if (!r.ok() || !pj.contains("normal_map")) return;
+  const std::string at = pointer + "/normal_map";
+  const auto& mj = pj["normal_map"];
+  if (!mj.is_object()) {
+    r.FailKey("normal_map", "must be an object with 'file' or 'procedural'");
+    return;
+  }
+  FieldReader m(mj, source, at);
+  NormalMapSource src;
+  m.Keys({"file", "procedural", "scale", "strength"}).String("file", &src.file).String("procedural", &src.procedural);
+  m.Number("strength", &src.strength, 0, 10);
+  if (m.ok() && src.file.empty() == src.procedural.empty()) m.Fail("needs exactly one of 'file' and 'procedural'");
+  if (m.ok() && mj.contains("scale")) {
+    const auto& v = mj["scale"];
+    const bool pair = v.is_array() && v.size() == 2 && v[0].is_number() && v[1].is_number();
+    const glm::dvec2 scale = pair ? glm::dvec2(v[0].get<double>(), v[1].get<double>()) : glm::dvec2(0);
+    if (!pair || !(scale.x > 0 && scale.y > 0 && scale.x <= 1e6 && scale.y <= 1e6))
+      m.FailKey("scale", "must be an array of 2 numbers in (0, 1e6]: repeats of the map per uv unit");
+    else
+      p->normal_map_scale = scale;
+  }
+  if (m.ok() && !src.file.empty() && std::filesystem::path(src.file).is_relative())
+    src.file = (std::filesystem::path(source).parent_path() / src.file).string();
+  if (m.ok() && p->bump_slope > 0) m.Fail("a plane with 'bump_slope' has its own normal pattern; drop one of them");
+  if (!m.ok()) {
+    r.Adopt(m.error());
+    return;
+  }
+  auto map = LoadNormalMap(src);
+  if (!map) {
+    r.Adopt(source + ": " + at + ": " + map.error());
+    return;
+  }
+  p->normal_map = *map;
+  p->normal_map_source = src;
+}
+
+}  // namespace
+
+Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) {
+  using R = Result<Scene>;
+  if (!j.is_object()) return R::Failure(source + ": /: a scene is a JSON object");
+  Scene s;
+  s.name = source;
+  FieldReader top(j, source, "");
+  top.Keys({"name", "primitives", "light", "material", "camera"}).String("name", &s.name).Require("primitives");
+  if (!top.ok()) return R::Failure(top.error());
+  const auto& prims = j["primitives"];
+  if (!prims.is_array() || prims.empty()) return R::Failure(source + ": /primitives: must be a non-empty array");
+  if (prims.size() > kMaxPrimitives)
+    return R::Failure(source + ": /primitives: " + std::to_string(prims.size()) + " primitives; at most " +
+                      std::to_string(kMaxPrimitives) + " are supported");
+  int index = 0;
+  for (const auto& pj : prims) {
+    const std::string pointer = "/primitives/" + std::to_string(index++);
+    if (!pj.is_object()) return R::Failure(source + ": " + pointer + ": must be an object with a 'type'");
+    FieldReader r(pj, source, pointer);
+    std::string type;
+    r.Require("type").String("type", &type);
+    if (!r.ok()) return R::Failure(r.error());
+    Primitive p;
+    if (type == "sphere") {
+      p.type = Primitive::Type::kSphere;
+      r.Keys({"type", "center", "radius", "normal_map"}).Require("center");
+      r.Vec3("center", &p.a).Number("radius", &p.radius, 0, kMaxCoordinate, true);
+    } else if (type == "capsule") {
+      p.type = Primitive::Type::kCapsule;
+      p.radius = 0.02;
+      r.Keys({"type", "a", "b", "radius", "normal_map"}).Require("a").Require("b");
+      r.Vec3("a", &p.a).Vec3("b", &p.b).Number("radius", &p.radius, 0, kMaxCoordinate, true);
+      if (r.ok() && glm::length(p.b - p.a) < 1e-9) r.FailKey("b", "coincides with 'a': a capsule needs two ends");
+    } else if (type == "plane") {
+      p.type = Primitive::Type::kPlane;
+      p.radius = 0;
+      r.Keys({"type", "height", "bump_slope", "bump_frequency", "normal_map"});
+      r.Number("height", &p.radius, -kMaxCoordinate, kMaxCoordinate)
+          .Number("bump_slope", &p.bump_slope, 0, 10)
+          .Number("bump_frequency", &p.bump_frequency, 0, 1e4);
+      if (r.ok() && p.bump_slope > 0 && p.bump_frequency <= 0)
+        r.FailKey("bump_frequency", "must be > 0 when 'bump_slope' is");
+    } else {
+      r.FailKey("type", "unknown type '" + type + "' (sphere, capsule, plane)");
+    }
+    ReadNormalMap(r, pj, source, pointer, &p);
+    if (!r.ok()) return R::Failure(r.error());
+    s.primitives.push_back(p);
+  }
+  std::vector<const NormalMap*> maps;
+  std::size_t map_words = 0;
+  for (const Primitive& p : s.primitives)
+    if (p.normal_map && std::find(maps.begin(), maps.end(), p.normal_map.get()) == maps.end()) {
+      maps.push_back(p.normal_map.get());
+      for (const NormalMapLevel& level : p.normal_map->levels) map_words += 3 * level.texels.size();
+    }
+  if (map_words > kMaxNormalMapWords)
+    return R::Failure(source + ": /primitives: the normal maps' mip chains take " + std::to_string(map_words / 3) +
+                      " texels; at most " + std::to_string(kMaxNormalMapWords / 3) +
+                      " fit (about one 2048 x 2048 map; use smaller maps)");
+  if (j.contains("light")) {
+    const auto& lj = j["light"];
+    if (!lj.is_object()) return R::Failure(source + ": /light: must be an object");
+    std::string type = "directional";
+    FieldReader r(lj, source, "/light");
+    r.String("type", &type);
+    if (r.ok() && type == "directional") {
+      glm::dvec3 dir{0, 1, 0}, rad{1, 1, 1};
+      r.Keys({"type", "direction", "irradiance"}).Vec3("direction", &dir).Vec3("irradiance", &rad);
+      if (r.ok() && glm::length(dir) < 1e-9) r.FailKey("direction", "must not be zero");
+      if (r.ok() && glm::any(glm::lessThan(rad, glm::dvec3(0)))) r.FailKey("irradiance", "must be >= 0");
+      s.light.type = shading::LightType::kDirectional;
+      if (r.ok()) s.light.vec = glm::normalize(dir);
+      s.light.radiance = rad;
+    } else if (r.ok() && type == "sphere") {
+      s.light.type = shading::LightType::kSphere;
+      s.light.radius = 0.05;
+      r.Keys({"type", "center", "intensity", "radius"})
+          .Vec3("center", &s.light.vec)
+          .Vec3("intensity", &s.light.radiance)
+          .Number("radius", &s.light.radius, 1e-6, kMaxCoordinate);
+      if (r.ok() && glm::any(glm::lessThan(s.light.radiance, glm::dvec3(0)))) r.FailKey("intensity", "must be >= 0");
+    } else if (r.ok() && type == "sg") {
+      // A distant spherical Gaussian (seed 004): amplitude e^(sharpness (axis.l - 1)).
+      glm::dvec3 axis{0, 1, 0}, amplitude{1, 1, 1};
+      double sharpness = 0;
+      r.Keys({"type", "axis", "sharpness", "amplitude"})
+          .Require("axis")
+          .Require("sharpness")
+          .Require("amplitude")
+          .Vec3("axis", &axis)
+          .Number("sharpness", &sharpness, 0, kMaxSgSharpness)
+          .Vec3("amplitude", &amplitude);
+      if (r.ok() && glm::length(axis) < 1e-9) r.FailKey("axis", "must not be zero");
+      if (r.ok() && glm::any(glm::lessThan(amplitude, glm::dvec3(0)))) r.FailKey("amplitude", "must be >= 0");
+      s.light.type = shading::LightType::kSg;
+      if (r.ok()) s.light.vec = glm::normalize(axis);
+      s.light.radius = sharpness;
+      s.light.radiance = amplitude;
+    } else if (r.ok()) {
+      r.FailKey("type", "must be directional, sphere or sg, got '" + type + "'");
+    }
+    if (!r.ok()) return R::Failure(r.error());
+  }
+  if (j.contains("material")) {
+    if (!j["material"].is_string()) return R::Failure(source + ": /material: must be a spec string like \"ggx:0.05\"");
+    auto m = ParseMaterial(j["material"].get<std::string>(), s.material);
+    if (!m) return R::Failure(source + ": /material: " + m.error());
+    s.material = *m;
+  }
+  if (j.contains("camera")) {
+    const auto& cj = j["camera"];
+    if (!cj.is_object()) return R::Failure(source + ": /camera: must be an object");
+    FieldReader r(cj, source, "/camera");
+    r.Keys({"target", "distance", "elevation_deg", "azimuth_deg", "fov_y_deg"})
+        .Vec3("target", &s.rig.target)
+        .Number("distance", &s.rig.distance, 1e-6, kMaxCoordinate)
+        .Number("elevation_deg", &s.rig.elevation_deg, -89, 89)
+        .Number("azimuth_deg", &s.rig.azimuth_deg, -1e6, 1e6)
+        .Number("fov_y_deg", &s.rig.fov_y_deg, 1, 170);
+    if (!r.ok()) return R::Failure(r.error());
+  }
+  return s;
+}
+
+}  // namespace shimmer::scene

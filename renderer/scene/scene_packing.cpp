@@ -1,0 +1,149 @@
+// A scene as the kernel reads it: its primitives, normal maps and BVH packed
+// into vec4 words (scene.glsl's layout), and the feature mask that
+// specialises the kernel.
+#include "shimmer/renderer/scene.h"
+
+#include <algorithm>
+#include <numeric>
+
+namespace shimmer::scene {
+
+namespace {
+
+// --- BVH --------------------------------------------------------------------
+
+struct Box {
+  glm::dvec3 lo{1e300}, hi{-1e300};
+  void Add(const Box& b) {
+    lo = glm::min(lo, b.lo);
+    hi = glm::max(hi, b.hi);
+  }
+};
+
+Box Bounds(const Primitive& p) {
+  Box b;
+  glm::dvec3 r(p.radius);
+  if (p.type == Primitive::Type::kSphere) return {p.a - r, p.a + r};
+  b.lo = glm::min(p.a, p.b) - r;
+  b.hi = glm::max(p.a, p.b) + r;
+  return b;
+}
+
+struct BvhNode {
+  Box box;
+  int skip = 0;   // the node after this subtree
+  int prim = -1;  // a leaf's one primitive; -1: interior
+};
+
+// Median split on the widest centroid axis, nodes appended in depth-first
+// order (scene.glsl walks them without a stack).
+void BuildNode(std::vector<BvhNode>& nodes, std::vector<int>& order, int begin, int end,
+               const std::vector<Primitive>& prims) {
+  const int index = static_cast<int>(nodes.size());
+  nodes.emplace_back();
+  Box box, centroids;
+  for (int i = begin; i < end; ++i) {
+    Box b = Bounds(prims[order[i]]);
+    box.Add(b);
+    glm::dvec3 c = (b.lo + b.hi) * 0.5;
+    centroids.Add({c, c});
+  }
+  nodes[index].box = box;
+  if (end - begin == 1) {
+    nodes[index].prim = begin;
+  } else {
+    glm::dvec3 ext = centroids.hi - centroids.lo;
+    int axis = ext.x > ext.y ? (ext.x > ext.z ? 0 : 2) : (ext.y > ext.z ? 1 : 2);
+    int mid = (begin + end) / 2;
+    std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end, [&](int a, int b) {
+      Box ba = Bounds(prims[a]), bb = Bounds(prims[b]);
+      return ba.lo[axis] + ba.hi[axis] < bb.lo[axis] + bb.hi[axis];
+    });
+    BuildNode(nodes, order, begin, mid, prims);
+    BuildNode(nodes, order, mid, end, prims);
+  }
+  nodes[index].skip = static_cast<int>(nodes.size());
+}
+
+glm::vec4 PrimWord0(const Primitive& p) {
+  return {float(static_cast<int>(p.type)), float(p.radius), float(p.bump_slope), float(p.bump_frequency)};
+}
+
+}  // namespace
+
+int SceneFeatures(const Scene& scene) {
+  using namespace shading;
+  int mask = 0;
+  for (const Primitive& p : scene.primitives) {
+    if (p.normal_map) mask |= kSceneNormalMaps;
+    if (p.type == Primitive::Type::kSphere) mask |= kSceneSpheres;
+    if (p.type == Primitive::Type::kCapsule) mask |= kSceneCapsules;
+    if (p.type == Primitive::Type::kPlane) mask |= kScenePlanes | (p.bump_slope != 0 ? kSceneBumps : 0);
+  }
+  return mask;
+}
+
+std::vector<glm::vec4> PackScene(const Scene& scene) {
+  std::vector<Primitive> bounded, unbounded;
+  for (const Primitive& p : scene.primitives) (p.type == Primitive::Type::kPlane ? unbounded : bounded).push_back(p);
+  std::vector<int> order(bounded.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::vector<BvhNode> nodes;
+  if (!bounded.empty()) BuildNode(nodes, order, 0, static_cast<int>(bounded.size()), bounded);
+  const int first_prim_word = 1 + 2 * static_cast<int>(nodes.size());
+  std::vector<glm::vec4> words;
+  words.push_back({float(bounded.size()), float(nodes.size()), float(first_prim_word), float(unbounded.size())});
+  for (const BvhNode& n : nodes) {
+    words.push_back({float(n.box.lo.x), float(n.box.lo.y), float(n.box.lo.z), float(n.skip)});
+    words.push_back({float(n.box.hi.x), float(n.box.hi.y), float(n.box.hi.z), float(n.prim + 1)});  // 0: interior
+  }
+  std::vector<const Primitive*> packed;
+  for (int i : order) packed.push_back(&bounded[i]);
+  for (const Primitive& p : unbounded) packed.push_back(&p);
+  // Normal maps (normal_map.glsl's layout): one header per mapped primitive
+  // (its scale is its own), then each map's texels once however many
+  // primitives share it.
+  std::vector<const NormalMap*> maps;
+  std::vector<int> header_word(packed.size(), 0);
+  int next = first_prim_word + 3 * static_cast<int>(packed.size());
+  for (std::size_t k = 0; k < packed.size(); ++k) {
+    const NormalMap* map = packed[k]->normal_map.get();
+    if (!map) continue;
+    header_word[k] = next;
+    next += 2 + static_cast<int>(map->levels.size());
+    if (std::find(maps.begin(), maps.end(), map) == maps.end()) maps.push_back(map);
+  }
+  std::vector<std::vector<int>> level_word(maps.size());
+  for (std::size_t m = 0; m < maps.size(); ++m)
+    for (const NormalMapLevel& level : maps[m]->levels) {
+      level_word[m].push_back(next);
+      next += 3 * static_cast<int>(level.texels.size());
+    }
+  for (std::size_t k = 0; k < packed.size(); ++k) {
+    const Primitive& p = *packed[k];
+    words.push_back(PrimWord0(p));
+    words.push_back({float(p.a.x), float(p.a.y), float(p.a.z), float(header_word[k])});
+    words.push_back({float(p.b.x), float(p.b.y), float(p.b.z), 0.0f});
+  }
+  for (std::size_t k = 0; k < packed.size(); ++k) {
+    const NormalMap* map = packed[k]->normal_map.get();
+    if (!map) continue;
+    const std::size_t m = std::size_t(std::find(maps.begin(), maps.end(), map) - maps.begin());
+    const NormalMapLevel& top = map->levels.front();
+    words.push_back({float(map->levels.size()), float(top.width), float(top.height), 0.0f});
+    const glm::dvec2 scale = packed[k]->normal_map_scale;
+    words.push_back({float(scale.x), float(scale.y), 0.0f, 0.0f});
+    for (std::size_t l = 0; l < map->levels.size(); ++l)
+      words.push_back({float(level_word[m][l]), float(map->levels[l].width), float(map->levels[l].height), 0.0f});
+  }
+  for (const NormalMap* map : maps)
+    for (const NormalMapLevel& level : map->levels)
+      for (const NormalMapTexel& t : level.texels) {
+        words.push_back({t.mean_normal.x, t.mean_normal.y, t.mean_normal.z, t.toksvig_ft});
+        words.push_back({t.b.x, t.b.y, t.m.x, t.m.y});
+        words.push_back({t.m.z, 0.0f, 0.0f, 0.0f});
+      }
+  return words;
+}
+
+}  // namespace shimmer::scene

@@ -17,7 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "shimmer/experiments/fit.h"
+#include "shimmer/experiments/minimize.h"
 #include "shimmer/experiments/runner.h"
 #include "shimmer/experiments/spec.h"
 

@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "shimmer/experiments/fit.h"
+#include "shimmer/experiments/minimize.h"
 #include "shimmer/core/result.h"
 #include "shimmer/shading/user_variant.h"
 

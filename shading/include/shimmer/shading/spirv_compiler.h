@@ -51,7 +51,7 @@ std::string SpecializerVersion();
 // variant or another order of the shared declarations (glslang declares a
 // constant where it first meets it) leave it as it was; an edit of code the
 // kernel runs moves it. The optimizer keeps the arithmetic, so equal hashes
-// mean equal computations. Job ids are built on it (experiments/spec/job.h).
+// mean equal computations. Job ids are built on it (shimmer/experiments/job.h).
 Result<std::string> CanonicalSpirvHash(const Spirv& module);
 // The static instruction counts (InstructionCensus, shading.h) of the canonical form of `module` (the code this
 // kernel runs, every function inlined), by the unit they need: a

@@ -1,4 +1,4 @@
-#include "shimmer/experiments/fit.h"
+#include "shimmer/experiments/minimize.h"
 
 #include <ceres/ceres.h>
 

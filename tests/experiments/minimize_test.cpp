@@ -4,7 +4,7 @@
 #include <cmath>
 #include <fstream>
 
-#include "shimmer/experiments/fit.h"
+#include "shimmer/experiments/minimize.h"
 #include "shimmer/experiments/fit_report.h"
 #include "shimmer/experiments/fit_run.h"
 #include "temp_dir.h"

@@ -1,6 +1,6 @@
-// Fitting variant parameters (fp_max and friends) with Ceres Solver: a 1-D
-// bounded minimisation of a rendered objective started from a coarse sweep,
-// and a robust closed form fp_max(alpha) across materials.
+// The searches fits run, with Ceres Solver, on any objective (no spec, job
+// or render here): bounded minimisation of a noisy objective from a coarse
+// sweep or grid, and a robust closed form fp_max(alpha) across materials.
 #pragma once
 
 #include <functional>

@@ -14,47 +14,30 @@ cd "$root"
 specs=("$@")
 [ ${#specs[@]} -gt 0 ] || specs=(standard quick normal-maps glints engine-settings user-variants external)
 
-run() {  # run SPEC: the spec's jobs into runs/SPEC
-  local spec=$1
-  echo "== $spec: $(date -u +%H:%M:%S)"
-  "$shimmer" run "experiments/specs/$spec.json" --jobs 2 --db "runs/$spec/results.db" --work "runs/$spec/frames"
-}
+# Each spec's report title (and report options).
+declare -A title=(
+  [standard]="shimmer standard spec" [quick]="shimmer quick spec" [normal-maps]="shimmer normal-map filters"
+  [glints]="shimmer glints" [engine-settings]="shimmer engine settings" [user-variants]="shimmer report"
+  [external]="shimmer: an engine's frames beside shimmer's variants")
+declare -A options=([standard]="--fits results/engine-settings/fit.json" [external]="--video --slow 2")
 
 for spec in "${specs[@]}"; do
-  case "$spec" in
-    standard)
-      run standard
-      "$shimmer" report runs/standard/results.db -o results/standard --title "shimmer standard spec" \
-        --fits results/engine-settings/fit.json ;;
-    quick)
-      run quick
-      "$shimmer" report runs/quick/results.db -o results/quick --title "shimmer quick spec" ;;
-    normal-maps)
-      run normal-maps
-      "$shimmer" report runs/normal-maps/results.db -o results/normal-maps --title "shimmer normal-map filters" ;;
-    glints)
-      run glints
-      "$shimmer" report runs/glints/results.db -o results/glints --title "shimmer glints" ;;
-    engine-settings)
-      run engine-settings
-      "$shimmer" report runs/engine-settings/results.db -o results/engine-settings --title "shimmer engine settings" ;;
-    user-variants)
-      run user-variants
-      "$shimmer" report runs/user-variants/results.db -o results/user-variants ;;
-    external)
-      # The "engine's" frames: tk19 and a reference rendered by shimmer as if
-      # an engine had written them (experiments/specs/external.json).
-      frames=(--scene sphere-field --material ggx:0.02 --camera orbit --size 64 64 --frames 24)
-      [ -d runs/external-frames/tk19 ] ||
-        "$shimmer" render "${frames[@]}" --variant tk19 --out runs/external-frames/tk19
-      [ -d runs/external-frames/reference ] ||
-        "$shimmer" render "${frames[@]}" --reference-spp 16 --out runs/external-frames/reference
-      run external
-      "$shimmer" report runs/external/results.db -o results/external --video --slow 2 \
-        --title "shimmer: an engine's frames beside shimmer's variants" ;;
-    *)
-      echo "regenerate-results: unknown spec '$spec'" >&2
-      exit 2 ;;
-  esac
+  if [ -z "${title[$spec]+set}" ]; then
+    echo "regenerate-results: unknown spec '$spec' (the specs: ${!title[*]})" >&2
+    exit 2
+  fi
+  echo "== $spec: $(date -u +%H:%M:%S)"
+  if [ "$spec" = external ]; then
+    # The "engine's" frames: tk19 and a reference rendered by shimmer as if
+    # an engine had written them (experiments/specs/external.json).
+    frames=(--scene sphere-field --material ggx:0.02 --camera orbit --size 64 64 --frames 24)
+    [ -d runs/external-frames/tk19 ] ||
+      "$shimmer" render "${frames[@]}" --variant tk19 --out runs/external-frames/tk19
+    [ -d runs/external-frames/reference ] ||
+      "$shimmer" render "${frames[@]}" --reference-spp 16 --out runs/external-frames/reference
+  fi
+  "$shimmer" run "experiments/specs/$spec.json" --jobs 2 --db "runs/$spec/results.db" --work "runs/$spec/frames"
+  # shellcheck disable=SC2086 # the options are words
+  "$shimmer" report "runs/$spec/results.db" -o "results/$spec" --title "${title[$spec]}" ${options[$spec]:-}
 done
 echo "== done: $(date -u +%H:%M:%S)"

@@ -395,6 +395,57 @@ TEST(GpuReference, AdaptiveStopsAtTheTargetOrTheRoundCap) {
   EXPECT_EQ(min_count % 4, 0);
 }
 
+// An adaptive reference stops sampling a pixel once its replicates agree
+// within the tolerance, and a sequential stop can bias: on highlights a few
+// pixels wide (sphere-field's sub-pixel spheres, a sharp lobe), replicates
+// that all miss a highlight agree that nothing is there. The adaptive frame
+// must hold the energy a fixed high-spp reference finds, within the two
+// renders' standard errors, in total and pixel by pixel.
+//
+// DISABLED: it fails, and the failure is the finding. Measured on lavapipe:
+// the adaptive frame's total is 332.41 ± 0.19 against the fixed one's
+// 332.99 ± 0.03 (3 standard errors low), and 3 of 56 highlight pixels lie
+// beyond 4 standard errors (7 degrees of freedom predict 0.3). The stopping
+// rule sits in render.comp, which every reference kernel runs: its fix moves
+// every reference id, and waits for a session that regenerates the whole
+// store. No spec uses an adaptive reference (they use a fixed --reference-spp
+// and the convergence check); docs/renderer.md says so.
+TEST(GpuReference, DISABLED_AdaptiveAgreesWithAFixedHighSppReferenceOnSparseHighlights) {
+  RenderSettings s = Settings("sphere-field", "none", DerivativeSource::kAnalytic, 32);
+  s.material = scene::ParseMaterial("ggx:0.02", s.material).value();
+  // 8 replicates: stderr.Y has at least 7 degrees of freedom, so 4 standard
+  // errors hold for all but ~0.5 % of pixels.
+  s.reference_spp = 2;
+  s.reference_replicates = 8;
+  s.reference_tolerance = 0.05;
+  s.max_rounds = 256;
+  Frame adaptive = RenderOne(s, 3);
+  s.reference_spp = 24;
+  s.reference_tolerance = 0;
+  Frame fixed = RenderOne(s, 3);
+  double sum_a = 0, var_a = 0, sum_f = 0, var_f = 0, peak = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) peak = std::max(peak, double(fixed.at(kSpecularR + 1, x, y)));
+  int within = 0, lit = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const double a = f_lum(adaptive, x, y), f = f_lum(fixed, x, y);
+      const double se_a = adaptive.at(kStderr, x, y), se_f = fixed.at(kStderr, x, y);
+      sum_a += a, var_a += se_a * se_a;
+      sum_f += f, var_f += se_f * se_f;
+      // The highlights: specular (green) at a tenth of the peak and above.
+      if (std::max(adaptive.at(kSpecularR + 1, x, y), fixed.at(kSpecularR + 1, x, y)) < 0.1 * peak) continue;
+      ++lit;
+      within += std::abs(a - f) <= 4 * std::hypot(se_a, se_f) + 1e-5 * (1 + f);
+    }
+  ASSERT_GT(lit, 4) << "the shot has no highlight to check";
+  EXPECT_LT(lit, 32 * 32 / 4) << "the highlights are not sparse";
+  EXPECT_NEAR(sum_a, sum_f, 4 * std::sqrt(var_a + var_f)) << "adaptive " << sum_a << ", fixed " << sum_f;
+  EXPECT_GE(within, lit * 97 / 100) << within << " of " << lit << " highlight pixels agree; totals: adaptive "
+                                     << sum_a << " ± " << std::sqrt(var_a) << ", fixed " << sum_f << " ± "
+                                     << std::sqrt(var_f) << " (" << adaptive.rounds << " rounds)";
+}
+
 TEST(GpuSequence, WritesExrLayersAndSequenceJson) {
   namespace fs = std::filesystem;
   fs::path dir = fs::temp_directory_path() / "shimmer_gpu_sequence_test";

@@ -189,6 +189,120 @@ ExternalSequence ParseSequence(const json& e, int index, const Spec& spec, const
   }, "sequences");
 }
 
+// The spec object j's "reference": the reference's samples (per material too), tolerance,
+// replicates and convergence check.
+void ParseReference(const json& j, Spec& s) {
+  const json& r = j["reference"];
+  if (!r.is_object()) throw SpecError{"reference", "must be {\"spp\": N} or {\"tolerance\": T}"};
+  RejectUnknownKeys(r, {"spp", "spp_by_material", "tolerance", "replicates", "converge"}, "reference");
+  if (r.contains("spp")) s.reference.spp = PositiveInt(r["spp"], "spp", render::kMaxReferenceSpp);
+  if (r.contains("spp_by_material")) {
+    const json& m = r["spp_by_material"];
+    if (!m.is_object()) throw SpecError{"spp_by_material", "must be {\"MATERIAL\": N, ...}"};
+    std::set<std::string> materials;  // of the top level and every group
+    for (const ShotGroup& group : AllGroups(s)) materials.insert(group.materials.begin(), group.materials.end());
+    for (const auto& [material, spp] : m.items()) {
+      if (!materials.count(material))
+        throw SpecError{"spp_by_material", material + ": not one of the spec's materials" +
+                                               std::string(s.groups.empty() ? "" : " (nor of its groups)")};
+      s.reference_spp_by_material[material] = PositiveInt(spp, "spp_by_material", render::kMaxReferenceSpp);
+    }
+  }
+  if (r.contains("tolerance")) {
+    s.reference.tolerance = Number(r["tolerance"], "tolerance");
+    if (s.reference.tolerance <= 0 || s.reference.tolerance >= 1) throw SpecError{"tolerance", "must be in (0, 1)"};
+  }
+  if (r.contains("replicates")) {
+    s.reference.replicates = PositiveInt(r["replicates"], "replicates", render::kMaxRounds);
+    if (s.reference.replicates < 2)
+      throw SpecError{"replicates", "must be at least 2 (the spread of replicates is the standard error)"};
+  }
+  if (r.contains("converge")) {
+    const json& c = r["converge"];
+    if (!c.is_object()) throw SpecError{"converge", "must be {\"energy\": E, \"tv\": T}"};
+    RejectUnknownKeys(c, {"energy", "tv"}, "reference.converge");
+    if (c.contains("energy")) s.reference.converge.energy = Number(c["energy"], "converge.energy");
+    if (c.contains("tv")) s.reference.converge.tv = Number(c["tv"], "converge.tv");
+    if (s.reference.converge.energy <= 0 || s.reference.converge.tv <= 0)
+      throw SpecError{"converge", "tolerances must be > 0"};
+  }
+}
+
+// The spec object j's "benchmark": off, or its size, repetitions and precision.
+void ParseBenchmark(const json& j, Spec& s) {
+  const json& b = j["benchmark"];
+  if (b.is_boolean()) {
+    s.benchmark.enabled = b.get<bool>();
+  } else if (b.is_object()) {
+    RejectUnknownKeys(b, {"size", "repetitions", "precision", "max_repetitions"}, "benchmark");
+    if (b.contains("size")) {
+      const json& size = b["size"];
+      if (!size.is_array() || size.size() != 2) throw SpecError{"benchmark.size", "must be [width, height]"};
+      s.benchmark.width = PositiveInt(size[0], "benchmark.size", render::kMaxImageSide);
+      s.benchmark.height = PositiveInt(size[1], "benchmark.size", render::kMaxImageSide);
+      if (s.benchmark.width % 2 || s.benchmark.height % 2)
+        throw SpecError{"benchmark.size", "width and height must be even (2x2 quads)"};
+    }
+    if (b.contains("repetitions"))
+      s.benchmark.repetitions = PositiveInt(b["repetitions"], "benchmark.repetitions", 1000);
+    if (b.contains("max_repetitions"))
+      s.benchmark.max_repetitions = PositiveInt(b["max_repetitions"], "benchmark.max_repetitions", 10000);
+    if (b.contains("precision")) {
+      s.benchmark.precision = Number(b["precision"], "benchmark.precision");
+      if (!(s.benchmark.precision > 0 && s.benchmark.precision < 1))
+        throw SpecError{"benchmark.precision", "must be in (0, 1): the half-width of each cost ratio's interval"};
+    }
+    if (s.benchmark.max_repetitions < s.benchmark.repetitions)
+      throw SpecError{"benchmark.max_repetitions", "must be at least benchmark.repetitions"};
+  } else {
+    throw SpecError{"benchmark",
+                    "must be true, false or {\"size\": [w, h], \"repetitions\": R, \"precision\": P, "
+                    "\"max_repetitions\": M}"};
+  }
+}
+
+// The spec object j's "metrics": the highlight mask, the Welch segment and sparkle statistics.
+void ParseMetricOptions(const json& j, Spec& s) {
+  const json& m = j["metrics"];
+  if (!m.is_object()) throw SpecError{"metrics", "must be an object"};
+  RejectUnknownKeys(m, {"highlight_mask", "highlight_threshold", "segment", "sparkle_threshold"}, "metrics");
+  if (m.contains("highlight_mask")) {
+    if (!m["highlight_mask"].is_boolean()) throw SpecError{"highlight_mask", "must be true or false"};
+    s.metrics.highlight_mask = m["highlight_mask"];
+  }
+  if (m.contains("highlight_threshold")) {
+    s.metrics.highlight_threshold = Number(m["highlight_threshold"], "highlight_threshold");
+    if (s.metrics.highlight_threshold <= 0) throw SpecError{"highlight_threshold", "must be > 0"};
+  }
+  if (m.contains("segment")) s.metrics.segment = PositiveInt(m["segment"], "segment", s.frames);
+  if (m.contains("sparkle_threshold")) {
+    s.metrics.sparkle_threshold = Number(m["sparkle_threshold"], "sparkle_threshold");
+    if (s.metrics.sparkle_threshold < 0) throw SpecError{"sparkle_threshold", "must be >= 0 (0: no sparkle statistics)"};
+  }
+}
+
+// Counted before anything is expanded, every group's cross product
+// together (before jobs two groups share are merged): a cross product can
+// be astronomically large.
+void CheckJobCount(const Spec& s) {
+  double jobs = 0;
+  for (const ShotGroup& g : AllGroups(s)) {
+    double combos = 0;
+    for (const VariantSweep& v : g.variants) {
+      double n = 1;
+      for (const auto& [name, values] : v.params) n *= double(values.size());
+      combos += n;
+    }
+    jobs += double(g.scenes.size()) * double(g.materials.size()) * double(g.cameras.size()) * combos *
+            double(g.derivatives.size());
+  }
+  if (jobs > double(kMaxJobs))
+    throw SpecError{s.groups.empty() ? "variants" : "groups",
+                    "the spec expands to " + NumberText(jobs) + " jobs" +
+                        (s.groups.empty() ? "" : " (top level and groups together)") + "; at most " +
+                        std::to_string(kMaxJobs) + " are supported (split it into several specs)"};
+}
+
 Spec ParseSpecObject(const json& j, const std::filesystem::path& base) {
   if (!j.is_object()) throw SpecError{"", "a spec is a JSON object"};
   RejectUnknownKeys(j,
@@ -242,91 +356,9 @@ Spec ParseSpecObject(const json& j, const std::filesystem::path& base) {
     s.fps = Number(j["fps"], "fps");
     if (s.fps <= 0 || s.fps > 1e6) throw SpecError{"fps", "must be > 0 and <= 1e6"};
   }
-  if (j.contains("reference")) {
-    const json& r = j["reference"];
-    if (!r.is_object()) throw SpecError{"reference", "must be {\"spp\": N} or {\"tolerance\": T}"};
-    RejectUnknownKeys(r, {"spp", "spp_by_material", "tolerance", "replicates", "converge"}, "reference");
-    if (r.contains("spp")) s.reference.spp = PositiveInt(r["spp"], "spp", render::kMaxReferenceSpp);
-    if (r.contains("spp_by_material")) {
-      const json& m = r["spp_by_material"];
-      if (!m.is_object()) throw SpecError{"spp_by_material", "must be {\"MATERIAL\": N, ...}"};
-      std::set<std::string> materials;  // of the top level and every group
-      for (const ShotGroup& group : AllGroups(s)) materials.insert(group.materials.begin(), group.materials.end());
-      for (const auto& [material, spp] : m.items()) {
-        if (!materials.count(material))
-          throw SpecError{"spp_by_material", material + ": not one of the spec's materials" +
-                                                 std::string(s.groups.empty() ? "" : " (nor of its groups)")};
-        s.reference_spp_by_material[material] = PositiveInt(spp, "spp_by_material", render::kMaxReferenceSpp);
-      }
-    }
-    if (r.contains("tolerance")) {
-      s.reference.tolerance = Number(r["tolerance"], "tolerance");
-      if (s.reference.tolerance <= 0 || s.reference.tolerance >= 1) throw SpecError{"tolerance", "must be in (0, 1)"};
-    }
-    if (r.contains("replicates")) {
-      s.reference.replicates = PositiveInt(r["replicates"], "replicates", render::kMaxRounds);
-      if (s.reference.replicates < 2)
-        throw SpecError{"replicates", "must be at least 2 (the spread of replicates is the standard error)"};
-    }
-    if (r.contains("converge")) {
-      const json& c = r["converge"];
-      if (!c.is_object()) throw SpecError{"converge", "must be {\"energy\": E, \"tv\": T}"};
-      RejectUnknownKeys(c, {"energy", "tv"}, "reference.converge");
-      if (c.contains("energy")) s.reference.converge.energy = Number(c["energy"], "converge.energy");
-      if (c.contains("tv")) s.reference.converge.tv = Number(c["tv"], "converge.tv");
-      if (s.reference.converge.energy <= 0 || s.reference.converge.tv <= 0)
-        throw SpecError{"converge", "tolerances must be > 0"};
-    }
-  }
-  if (j.contains("benchmark")) {
-    const json& b = j["benchmark"];
-    if (b.is_boolean()) {
-      s.benchmark.enabled = b.get<bool>();
-    } else if (b.is_object()) {
-      RejectUnknownKeys(b, {"size", "repetitions", "precision", "max_repetitions"}, "benchmark");
-      if (b.contains("size")) {
-        const json& size = b["size"];
-        if (!size.is_array() || size.size() != 2) throw SpecError{"benchmark.size", "must be [width, height]"};
-        s.benchmark.width = PositiveInt(size[0], "benchmark.size", render::kMaxImageSide);
-        s.benchmark.height = PositiveInt(size[1], "benchmark.size", render::kMaxImageSide);
-        if (s.benchmark.width % 2 || s.benchmark.height % 2)
-          throw SpecError{"benchmark.size", "width and height must be even (2x2 quads)"};
-      }
-      if (b.contains("repetitions"))
-        s.benchmark.repetitions = PositiveInt(b["repetitions"], "benchmark.repetitions", 1000);
-      if (b.contains("max_repetitions"))
-        s.benchmark.max_repetitions = PositiveInt(b["max_repetitions"], "benchmark.max_repetitions", 10000);
-      if (b.contains("precision")) {
-        s.benchmark.precision = Number(b["precision"], "benchmark.precision");
-        if (!(s.benchmark.precision > 0 && s.benchmark.precision < 1))
-          throw SpecError{"benchmark.precision", "must be in (0, 1): the half-width of each cost ratio's interval"};
-      }
-      if (s.benchmark.max_repetitions < s.benchmark.repetitions)
-        throw SpecError{"benchmark.max_repetitions", "must be at least benchmark.repetitions"};
-    } else {
-      throw SpecError{"benchmark",
-                      "must be true, false or {\"size\": [w, h], \"repetitions\": R, \"precision\": P, "
-                      "\"max_repetitions\": M}"};
-    }
-  }
-  if (j.contains("metrics")) {
-    const json& m = j["metrics"];
-    if (!m.is_object()) throw SpecError{"metrics", "must be an object"};
-    RejectUnknownKeys(m, {"highlight_mask", "highlight_threshold", "segment", "sparkle_threshold"}, "metrics");
-    if (m.contains("highlight_mask")) {
-      if (!m["highlight_mask"].is_boolean()) throw SpecError{"highlight_mask", "must be true or false"};
-      s.metrics.highlight_mask = m["highlight_mask"];
-    }
-    if (m.contains("highlight_threshold")) {
-      s.metrics.highlight_threshold = Number(m["highlight_threshold"], "highlight_threshold");
-      if (s.metrics.highlight_threshold <= 0) throw SpecError{"highlight_threshold", "must be > 0"};
-    }
-    if (m.contains("segment")) s.metrics.segment = PositiveInt(m["segment"], "segment", s.frames);
-    if (m.contains("sparkle_threshold")) {
-      s.metrics.sparkle_threshold = Number(m["sparkle_threshold"], "sparkle_threshold");
-      if (s.metrics.sparkle_threshold < 0) throw SpecError{"sparkle_threshold", "must be >= 0 (0: no sparkle statistics)"};
-    }
-  }
+  if (j.contains("reference")) ParseReference(j, s);
+  if (j.contains("benchmark")) ParseBenchmark(j, s);
+  if (j.contains("metrics")) ParseMetricOptions(j, s);
   if (j.contains("fit")) {
     const json& f = j["fit"];
     if (f.is_object()) {
@@ -344,25 +376,7 @@ Spec ParseSpecObject(const json& j, const std::filesystem::path& base) {
     if (q.size() > std::size_t(kMaxJobs)) throw SpecError{"sequences", "at most " + std::to_string(kMaxJobs)};
     for (std::size_t i = 0; i < q.size(); ++i) s.sequences.push_back(ParseSequence(q[i], int(i), s, base));
   }
-  // Counted before anything is expanded, every group's cross product
-  // together (before jobs two groups share are merged): a cross product can
-  // be astronomically large.
-  double jobs = 0;
-  for (const ShotGroup& g : AllGroups(s)) {
-    double combos = 0;
-    for (const VariantSweep& v : g.variants) {
-      double n = 1;
-      for (const auto& [name, values] : v.params) n *= double(values.size());
-      combos += n;
-    }
-    jobs += double(g.scenes.size()) * double(g.materials.size()) * double(g.cameras.size()) * combos *
-            double(g.derivatives.size());
-  }
-  if (jobs > double(kMaxJobs))
-    throw SpecError{s.groups.empty() ? "variants" : "groups",
-                    "the spec expands to " + NumberText(jobs) + " jobs" +
-                        (s.groups.empty() ? "" : " (top level and groups together)") + "; at most " +
-                        std::to_string(kMaxJobs) + " are supported (split it into several specs)"};
+  CheckJobCount(s);
   return s;
 }
 

@@ -1,6 +1,6 @@
 // The version of the code that turns frames into numbers: a hash of the
 // metrics library's sources and the EXR reader, made at build time. A stored
-// row measured by other code has another id (shimmer/experiments/job.h).
+// row measured by other code has another id (experiments/spec/job.h).
 #pragma once
 
 #include <string_view>

@@ -383,11 +383,11 @@ Result<RunPlan> PlanRun(const std::vector<Job>& all_jobs, const RunOptions& opti
   return plan;
 }
 
-RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) {
-  RunSummary summary;
-  const std::vector<Job> jobs = ShardOf(all_jobs, options.shard_index, options.shard_count);
-  summary.total = int(jobs.size());
-  // Bad input is found before anything is created.
+namespace {
+
+// Every job's settings (or an external job's frames) are valid; else the
+// first problem, naming the job.
+Status CheckJobInputs(const std::vector<Job>& jobs, const RunOptions& options) {
   for (const Job& job : jobs) {
     Status settings = Ok();
     if (job.external) {
@@ -395,12 +395,35 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
     } else if (auto rendered = JobSettings(job, options); !rendered) {
       settings = rendered.failure();
     }
-    if (!settings) {
-      summary.error = Prefixed(
+    if (!settings)
+      return Prefixed(
           "job " + JobId(job) + " (" + job.scene + " " + job.material + " " + job.camera + " " + job.variant + ")",
           settings.failure());
-      return summary;
-    }
+  }
+  return Ok();
+}
+
+// How many of `jobs` the store does not hold yet.
+Result<int> JobsToCompute(const std::vector<Job>& jobs, ResultStore& store) {
+  int to_compute = 0;
+  for (const Job& job : jobs) {
+    auto has = store.Has(JobId(job));
+    if (!has) return has.failure();
+    if (!*has) ++to_compute;
+  }
+  return to_compute;
+}
+
+}  // namespace
+
+RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) {
+  RunSummary summary;
+  const std::vector<Job> jobs = ShardOf(all_jobs, options.shard_index, options.shard_count);
+  summary.total = int(jobs.size());
+  // Bad input is found before anything is created.
+  if (Status inputs = CheckJobInputs(jobs, options); !inputs) {
+    summary.error = inputs.failure();
+    return summary;
   }
   auto lock = StoreLock::Acquire(options.db_path);
   if (!lock) {
@@ -425,15 +448,12 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
     if (!job.external) reference_locks[ReferenceId(job)];
 
   // The ETA counts the jobs left to compute, not those the store has.
-  int to_compute = 0;
-  for (const Job& job : jobs) {
-    auto has = store->Has(JobId(job));
-    if (!has) {
-      summary.error = has.failure();
-      return summary;
-    }
-    if (!*has) ++to_compute;
+  const auto counted = JobsToCompute(jobs, *store);
+  if (!counted) {
+    summary.error = counted.failure();
+    return summary;
   }
+  const int to_compute = *counted;
 
   const auto start = std::chrono::steady_clock::now();
   std::mutex mutex;  // guards the store, the summary and the progress

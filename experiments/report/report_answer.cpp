@@ -150,21 +150,31 @@ void ClassLeaderboards(Document& doc, const std::vector<const Group*>& groups) {
 
 void ReferenceNoiseSection(Document& doc, const std::vector<const Group*>& groups) {
   doc.Heading(3, kReferenceNoiseHeading);
-  std::set<const JobResult*> rows;
+  std::set<const JobResult*> rows, noisy;
   std::map<std::string, int> by_shot;
-  int unresolved = 0;
-  for (const Group* g : groups)
+  int unresolved = 0, faint = 0;
+  for (const Group* g : groups) {
+    const JobResult* none = NoneOf(*g);
     for (const JobResult* r : g->rows) {
       if (!rows.insert(r).second) continue;
-      if (Metric(r->metrics, "tv_err_floor") > kNoiseShareLimit) ++unresolved, ++by_shot[g->Shot()];
+      if (Metric(r->metrics, "tv_err_floor") > kNoiseShareLimit) noisy.insert(r);
+      if (!none || r == none) continue;
+      const Evidence e = EvidenceOf(*r), base = EvidenceOf(*none);
+      if (Decide(e, base) == Outcome::kUnresolved) ++unresolved, ++by_shot[g->Shot()];
+      else if (Decide(e, base) == Outcome::kTied && NoiseBelowVisibility(e, base)) ++faint;
     }
+  }
   const double share = rows.empty() ? 0.0 : double(unresolved) / double(rows.size());
-  doc.Paragraph(std::to_string(unresolved) + " of " + std::to_string(rows.size()) + " rows (" +
-                FormatNumber(100 * share, "%.1f") + " %) have `tv_err_floor` above " +
-                FormatNumber(kNoiseShareLimit, "%g") +
-                ": the reference's own noise explains most of their `tv_err`, so where such a row's interval "
-                "overlaps `none`'s it is **unresolved: reference noise**, not a tie, and it is never a win. A "
-                "reference with more samples would resolve them; the aim is at most 5 % of the rows" +
+  doc.Paragraph(std::to_string(noisy.size()) + " of " + std::to_string(rows.size()) +
+                " rows have `tv_err_floor` above " + FormatNumber(kNoiseShareLimit, "%g") +
+                ": the reference's own noise explains most of their `tv_err`. Where such a row's interval "
+                "overlaps `none`'s it is **unresolved: reference noise**, never a tie nor a win, unless that "
+                "noise's contrast is under " +
+                FormatNumber(100 * kVisibleContrast, "%g") + " % (" + std::to_string(faint) +
+                " rows: fainter than any visible flicker, the tie stands). " + std::to_string(unresolved) +
+                " rows (" + FormatNumber(100 * share, "%.1f") +
+                " %) are unresolved; a reference with more samples would resolve them. The aim is at most 5 % of "
+                "the rows" +
                 (share <= 0.05 ? std::string(", met.") : std::string(", not met in this store.")));
   std::vector<std::string> items;
   for (const auto& [shot, count] : by_shot) items.push_back(shot + ": " + std::to_string(count) + " rows");

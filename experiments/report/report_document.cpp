@@ -136,7 +136,9 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
   doc.Heading(3, group.key);
   const JobResult* none = NoneOf(group);
   int unresolved = 0;
-  for (const JobResult* r : group.rows) unresolved += Metric(r->metrics, "tv_err_floor") > kNoiseShareLimit;
+  if (none)
+    for (const JobResult* r : group.rows)
+      unresolved += r != none && Decide(EvidenceOf(*r), EvidenceOf(*none)) == Outcome::kUnresolved;
   const std::string noise =
       unresolved ? ", but " + std::to_string(unresolved) + " of its rows are **unresolved: reference noise**" : "";
 

@@ -12,4 +12,4 @@ plot 'sg_plane___ggx_0_05___orbit___quad_pareto.dat' index 0 using 1:3 with poin
      keyentry with points pt 6 lc rgb '#d62728' title '1: sg-warp-k16', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: sg-warp', \
      keyentry with points pt 6 lc rgb '#d62728' title '3: asg-warp-k16', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: tk21'
+     keyentry with points pt 6 lc rgb '#d62728' title '4: none'

@@ -11,4 +11,4 @@ plot 'sg_plane___ggx_0_05___orbit___quad_pareto.dat' index 0 using 1:2 with poin
      'sg_plane___ggx_0_05___orbit___quad_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
      keyentry with points pt 6 lc rgb '#d62728' title '1: sg-warp-k16', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: asg-warp-k16', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: tk21'
+     keyentry with points pt 6 lc rgb '#d62728' title '3: none'

@@ -13,4 +13,4 @@ plot 'sg_plane___ggx_0_2___orbit___quad_pareto.dat' index 0 using 1:3 with point
      keyentry with points pt 6 lc rgb '#d62728' title '2: sg-warp', \
      keyentry with points pt 6 lc rgb '#d62728' title '3: asg-warp-k16', \
      keyentry with points pt 6 lc rgb '#d62728' title '4: asg-warp', \
-     keyentry with points pt 6 lc rgb '#d62728' title '5: tk21'
+     keyentry with points pt 6 lc rgb '#d62728' title '5: none'

@@ -160,8 +160,9 @@ void ReferenceNoiseSection(Document& doc, const std::vector<const Group*>& group
       if (Metric(r->metrics, "tv_err_floor") > kNoiseShareLimit) noisy.insert(r);
       if (!none || r == none) continue;
       const Evidence e = EvidenceOf(*r), base = EvidenceOf(*none);
-      if (Decide(e, base) == Outcome::kUnresolved) ++unresolved, ++by_shot[g->Shot()];
-      else if (Decide(e, base) == Outcome::kTied && NoiseBelowVisibility(e, base)) ++faint;
+      const Outcome outcome = Decide(e, base);
+      if (outcome == Outcome::kUnresolved) ++unresolved, ++by_shot[g->Shot()];
+      else if (outcome == Outcome::kTied && NoiseBelowVisibility(e, base)) ++faint;
     }
   }
   const double share = rows.empty() ? 0.0 : double(unresolved) / double(rows.size());

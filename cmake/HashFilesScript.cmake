@@ -1,9 +1,17 @@
 # Script mode: writes OUT defining FUNCTION() in NAMESPACE, returning the
-# SHA-256 (first 16 hex digits) of every file in FILES, names and texts in
-# the order given: a version that moves whenever one of the files does.
+# SHA-256 (first 16 hex digits) of every file in FILES, names and code in
+# the order given: a version that moves whenever one of the files' code
+# does. Comments and the amount of white space are not code: they are
+# removed first, so that a comment edit moves nothing. (A "//" or "/*"
+# inside a string literal would be taken for a comment: the hashed files
+# have none, and cmake/HashFilesTest checks that.)
 set(all "")
 foreach(f IN LISTS FILES)
   file(READ ${f} text)
+  string(REGEX REPLACE "/\\*([^*]|\\*+[^*/])*\\*+/" " " text "${text}")
+  string(REGEX REPLACE "//[^\n]*" "" text "${text}")
+  string(REGEX REPLACE "[ \t\r\n]+" " " text "${text}")
+  string(STRIP "${text}" text)
   get_filename_component(name ${f} NAME)
   string(APPEND all "${name}\n${text}\n")
 endforeach()

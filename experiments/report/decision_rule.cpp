@@ -44,7 +44,63 @@ Evidence EvidenceOf(const JobResult& row) {
   if (noise >= 0 && mean > 0) e.noise_contrast = std::sqrt(noise) / mean;
   if (auto sp = row.metrics.find("sparkles"); sp != row.metrics.end() && sp->is_object())
     e.sparkle_count_ratio = Metric(*sp, "mean_count_ratio");
+  e.draws = row.draws;
+  e.tv_test = Metric(row.metrics, "tv_test");
+  e.ref_noise = Metric(row.metrics, "ref_noise");
+  e.joint_noise_sigma = Metric(row.metrics, "relmse_noise_sigma");
+  e.frames = row.metrics.value("frames", 0);
+  e.pixels = row.metrics.value("pixels", 0LL);
   return e;
+}
+
+namespace {
+
+bool Pair(const Evidence& a, const Evidence& b) { return a.draws && b.draws && a.draws->key == b.draws->key; }
+
+// The bootstrap interval of a - b widened in quadrature by 1.96 sigma.
+std::optional<PairedComparison> Paired(double a, const metrics::Replicates& ra, double b,
+                                       const metrics::Replicates& rb, double sigma) {
+  const auto ci = metrics::PairedDifference(a, ra, b, rb);
+  if (!ci) return std::nullopt;
+  PairedComparison out;
+  out.difference = a - b;
+  const double noise = 1.959963984540054 * (std::isnan(sigma) ? 0.0 : sigma);
+  out.ci.lo = out.difference - std::hypot(out.difference - ci->lo, noise);
+  out.ci.hi = out.difference + std::hypot(ci->hi - out.difference, noise);
+  const double half = 0.5 * (out.ci.hi - out.ci.lo);
+  out.noise_share = half > 0 ? noise / half : (noise > 0 ? 1.0 : 0.0);
+  return out;
+}
+
+}  // namespace
+
+std::optional<PairedComparison> PairedTvErr(const Evidence& a, const Evidence& b) {
+  if (!Pair(a, b) || std::isnan(a.tv_err) || std::isnan(b.tv_err)) return std::nullopt;
+  // Both rows were measured against one reference: its noise (a's and b's
+  // ref_noise are the same F) cancels but for the cross term.
+  const double noise = std::isnan(a.ref_noise) ? 0.0 : a.ref_noise;
+  const double sigma = metrics::PairedNoiseSigma(noise, a.tv_test, b.tv_test, a.frames, a.pixels);
+  return Paired(a.tv_err, a.draws->tv_err, b.tv_err, b.draws->tv_err, sigma);
+}
+
+std::optional<PairedComparison> PairedJoint(const Evidence& a, const Evidence& b) {
+  if (!Pair(a, b) || std::isnan(a.joint) || std::isnan(b.joint)) return std::nullopt;
+  const double sigma = (std::isnan(a.joint_noise_sigma) ? 0.0 : a.joint_noise_sigma) +
+                       (std::isnan(b.joint_noise_sigma) ? 0.0 : b.joint_noise_sigma);
+  return Paired(a.joint, a.draws->relmse, b.joint, b.draws->relmse, sigma);
+}
+
+double NoiseShare(const Evidence& a, const Evidence& b) {
+  if (auto paired = PairedTvErr(a, b)) return paired->noise_share;
+  if (std::isnan(a.noise_share) && std::isnan(b.noise_share)) return kNaN;
+  return std::max(std::isnan(a.noise_share) ? 0.0 : a.noise_share, std::isnan(b.noise_share) ? 0.0 : b.noise_share);
+}
+
+Verdict SeparatePaired(const PairedComparison& d) {
+  if (!(d.ci.lo == d.ci.lo) || !(d.ci.hi == d.ci.hi)) return Verdict::kUnknown;
+  if (d.ci.hi < 0) return Verdict::kBetter;
+  if (d.ci.lo > 0) return Verdict::kWorse;
+  return Verdict::kIndistinguishable;
 }
 
 Verdict Separate(Interval a, Interval b) {
@@ -57,7 +113,8 @@ Verdict Separate(Interval a, Interval b) {
 Outcome Decide(const Evidence& v, const Evidence& none) {
   if (!v.tv_err_ci.Known() || !none.tv_err_ci.Known()) return Outcome::kUnknown;
   if (Near(v.tv_err, none.tv_err) && (std::isnan(v.joint) || Near(v.joint, none.joint))) return Outcome::kNoEffect;
-  switch (Separate(v.tv_err_ci, none.tv_err_ci)) {
+  const std::optional<PairedComparison> paired = PairedTvErr(v, none);
+  switch (paired ? SeparatePaired(*paired) : Separate(v.tv_err_ci, none.tv_err_ci)) {
     case Verdict::kBetter: {
       const bool blurrier = v.spatial_ci.Known() && none.spatial_ci.Known() &&
                             v.spatial_ci.lo > kSpatialTolerance * none.spatial_ci.hi;
@@ -71,13 +128,12 @@ Outcome Decide(const Evidence& v, const Evidence& none) {
     case Verdict::kWorse: return Outcome::kLessSteady;
     default: break;
   }
-  if ((v.noise_share > kNoiseShareLimit || none.noise_share > kNoiseShareLimit) && !NoiseBelowVisibility(v, none))
-    return Outcome::kUnresolved;
+  if (NoiseShare(v, none) > kNoiseShareLimit && !NoiseBelowVisibility(v, none)) return Outcome::kUnresolved;
   return Outcome::kTied;
 }
 
 bool NoiseBelowVisibility(const Evidence& v, const Evidence& none) {
-  if (!(v.noise_share > kNoiseShareLimit || none.noise_share > kNoiseShareLimit)) return false;
+  if (!(NoiseShare(v, none) > kNoiseShareLimit)) return false;
   // Both rows share the reference; the larger contrast decides.
   const double contrast = std::max(v.noise_contrast, none.noise_contrast);
   return contrast < kVisibleContrast;  // false when either is unknown (NaN)
@@ -100,8 +156,11 @@ std::string OutcomeText(Outcome outcome) {
 }
 
 std::string DecisionRuleText() {
-  return "A variant is **better** than `none` in a table when (1) it is steadier: its `tv_err` 95 % interval lies "
-         "wholly below `none`'s; (2) it does not blur beyond tolerance: the lower end of its spatial error "
+  return "A variant is **better** than `none` in a table when (1) it is steadier: the 95 % interval of its `tv_err` "
+         "minus `none`'s lies below 0 (paired: both rows were measured on the same bootstrap draws against the "
+         "same reference, so the reference's noise, common to both, cancels but for a cross term that widens "
+         "the interval; rows without paired draws compare their own intervals, and it must lie wholly below "
+         "`none`'s); (2) it does not blur beyond tolerance: the lower end of its spatial error "
          "(`relmse_spatial`) interval is at most " +
          FormatNumber(kSpatialTolerance, "%g") +
          "× the upper end of `none`'s (else **steadier, blurrier**); and (3) it keeps the highlight: its "
@@ -110,10 +169,10 @@ std::string DecisionRuleText() {
          " (else **steadier, loses energy**); on a glint material (4) it shows between 1/" +
          FormatNumber(kSparkleTolerance, "%g") + " and " + FormatNumber(kSparkleTolerance, "%g") +
          "× the reference's sparkles per frame (else **steadier, loses the glints**). A variant within " + FormatNumber(100 * kNilEffect, "%g") +
-         " % of `none` in both `tv_err` and the joint error has **no effect**; one whose interval overlaps "
-         "`none`'s is **≈ none**, or **unresolved: reference noise** when the reference's noise explains over " +
+         " % of `none` in both `tv_err` and the joint error has **no effect**; one whose difference interval holds 0 "
+         "is **≈ none**, or **unresolved: reference noise** when the reference's noise is over " +
          FormatNumber(100 * kNoiseShareLimit, "%g") +
-         " % of either row's `tv_err` and that noise's contrast (√`ref_noise` / `ref_mean`) is not below " +
+         " % of that interval's half-width (unpaired: of either row's `tv_err`) and its contrast (√`ref_noise` / `ref_mean`) is not below " +
          FormatNumber(100 * kVisibleContrast, "%g") +
          " % (fainter noise hides no visible flicker, and the tie stands); one wholly above is **less steady**. A cell's **pick** is, among the "
          "filters better than `none` in at least " +
@@ -121,8 +180,8 @@ std::string DecisionRuleText() {
          " % of the cell's tables and of no effect in at most half, the one with the lowest median joint error "
          "(`relmse`) ratio to `none`; without one the answer is **keep `none`**. `supersample-N` is the "
          "brute-force baseline (N² shading per pixel) and never a pick. The pick and the runner-up are **tied** "
-         "unless the pick's joint-error interval lies below the runner-up's in at least half of their shared "
-         "tables and above it in none. Two values whose intervals overlap are never ranked.";
+         "unless the interval of the pick's joint error minus the runner-up's (paired as above) lies below 0 in at "
+         "least half of their shared tables and above it in none. Two values whose intervals overlap are never ranked.";
 }
 
 std::string CellRowOf(const Group& group) {
@@ -219,7 +278,9 @@ std::vector<CellAnswer> AnswerCells(const std::vector<const Group*>& groups) {
       for (const auto& [g, r] : cell.pick->rows) {
         auto it = other.find(g);
         if (it == other.end()) continue;
-        switch (Separate(Ci95(*r, "relmse"), Ci95(*it->second, "relmse"))) {
+        const Evidence a = EvidenceOf(*r), b = EvidenceOf(*it->second);
+        const std::optional<PairedComparison> paired = PairedJoint(a, b);
+        switch (paired ? SeparatePaired(*paired) : Separate(a.joint_ci, b.joint_ci)) {
           case Verdict::kBetter: ++cell.ahead; break;
           case Verdict::kWorse: ++cell.behind; break;
           default: ++cell.tied; break;

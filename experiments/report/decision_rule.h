@@ -5,10 +5,13 @@
 #pragma once
 
 #include <map>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "report_parts.h"
+#include "shimmer/metrics/block_bootstrap.h"
 
 namespace shimmer::experiments::report {
 
@@ -26,9 +29,13 @@ constexpr double kEnergyTolerance = 0.10;
 // in the standard spec reached 40x and 83x `none`'s, far outside it.
 constexpr double kSpatialTolerance = 1.5;
 
-// When the reference's own noise explains more than half of a row's
-// tv_err, the row's tv_err describes the reference rather than the variant:
-// a tie there is "unresolved", not "no difference" ...
+// When the reference's own noise is more than half of the uncertainty of
+// the comparison, the comparison describes the reference rather than the
+// variant: a tie there is "unresolved", not "no difference". A row and its
+// `none` measured on the same draws are compared paired (their tv_err
+// difference, in which the reference's noise, common to both, cancels but
+// for a cross term: NoiseShare); otherwise the share is tv_err_floor, the
+// part of either row's tv_err that the noise explains ...
 constexpr double kNoiseShareLimit = 0.5;
 
 // ... unless that noise is itself too faint to hide a flicker anyone could
@@ -68,7 +75,31 @@ struct Evidence {
   double sparkle_count_ratio = kNaN;  // with sparkle statistics: test's mean count over the reference's
   double noise_contrast = kNaN;       // sqrt(ref_noise) / ref_mean; NaN in stores measured before it
   Interval tv_err_ci, joint_ci, spatial_ci, energy_ci;
+  // For paired comparisons: the bootstrap's draws (null: compare unpaired),
+  // and what the reference noise's share of a paired difference needs.
+  std::shared_ptr<const metrics::BootstrapDraws> draws;
+  double tv_test = kNaN, ref_noise = kNaN, joint_noise_sigma = kNaN;
+  int frames = 0;
+  long long pixels = 0;
 };
+
+// a's tv_err minus b's with its 95 % interval, when their draws pair: the
+// bootstrap interval of the replicates' differences, widened in quadrature
+// by the reference noise's cross term (metrics::PairedNoiseSigma), and that
+// term's share of the interval's half-width.
+struct PairedComparison {
+  double difference = kNaN;
+  Interval ci;
+  double noise_share = kNaN;
+};
+std::optional<PairedComparison> PairedTvErr(const Evidence& a, const Evidence& b);
+// The same for the joint error (relmse), widened by the two rows' noise
+// sigmas summed (their noise is shared, its correlation unknown).
+std::optional<PairedComparison> PairedJoint(const Evidence& a, const Evidence& b);
+// The reference noise's share of what a comparison of a with b ranks: of
+// the paired difference's half-width when they pair, else the larger
+// tv_err_floor of the two.
+double NoiseShare(const Evidence& a, const Evidence& b);
 // From a row's metrics; the spatial part falls back to relmse in stores
 // measured before the split.
 Evidence EvidenceOf(const JobResult& row);
@@ -81,22 +112,24 @@ enum class Outcome {
   kLosesEnergy,  // steadier, but its energy interval misses ±kEnergyTolerance
   kLosesGlints,  // steadier, but its sparkle count ratio leaves [1/kSparkleTolerance, kSparkleTolerance]
   kLessSteady,   // tv_err interval wholly above none's
-  kUnresolved,   // tied where the reference's noise is over kNoiseShareLimit of either row's tv_err
-                 // and its contrast is not below kVisibleContrast (or not known)
+  kUnresolved,   // tied where the reference's noise is over kNoiseShareLimit of the comparison
+                 // (NoiseShare) and its contrast is not below kVisibleContrast (or not known)
   kBaseline,     // the row is `none`
   kUnknown       // an interval is missing
 };
 Outcome Decide(const Evidence& variant, const Evidence& none);
-// The reference's noise is a large share of the row's or `none`'s tv_err
-// (kNoiseShareLimit) but too faint to be seen (kVisibleContrast): a tie
+// The reference's noise is a large share of the comparison (NoiseShare
+// over kNoiseShareLimit) but too faint to be seen (kVisibleContrast): a tie
 // there is a tie. What the reports count beside the unresolved rows.
 bool NoiseBelowVisibility(const Evidence& variant, const Evidence& none);
 std::string OutcomeText(Outcome outcome);  // "better", "≈ none", "blurrier", ...
 
 // Two values with intervals, lower is better: kBetter only when a's interval
 // lies wholly below b's, else tied (kIndistinguishable). Every "lower",
-// "wins" or "fitted better" of a report is this test.
+// "wins" or "fitted better" of a report is this test, or SeparatePaired.
 Verdict Separate(Interval a, Interval b);
+// a against b by the interval of a - b: kBetter when it lies below 0.
+Verdict SeparatePaired(const PairedComparison& a_minus_b);
 
 // The rule in words, for the reports' method sections.
 std::string DecisionRuleText();

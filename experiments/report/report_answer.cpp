@@ -152,7 +152,7 @@ void ReferenceNoiseSection(Document& doc, const std::vector<const Group*>& group
   doc.Heading(3, kReferenceNoiseHeading);
   std::set<const JobResult*> rows, noisy;
   std::map<std::string, int> by_shot;
-  int unresolved = 0, faint = 0;
+  int unresolved = 0, faint = 0, compared = 0, paired = 0;
   for (const Group* g : groups) {
     const JobResult* none = NoneOf(*g);
     for (const JobResult* r : g->rows) {
@@ -160,23 +160,31 @@ void ReferenceNoiseSection(Document& doc, const std::vector<const Group*>& group
       if (Metric(r->metrics, "tv_err_floor") > kNoiseShareLimit) noisy.insert(r);
       if (!none || r == none) continue;
       const Evidence e = EvidenceOf(*r), base = EvidenceOf(*none);
+      ++compared;
+      paired += PairedTvErr(e, base).has_value();
       const Outcome outcome = Decide(e, base);
       if (outcome == Outcome::kUnresolved) ++unresolved, ++by_shot[g->Shot()];
       else if (outcome == Outcome::kTied && NoiseBelowVisibility(e, base)) ++faint;
     }
   }
   const double share = rows.empty() ? 0.0 : double(unresolved) / double(rows.size());
-  doc.Paragraph(std::to_string(noisy.size()) + " of " + std::to_string(rows.size()) +
-                " rows have `tv_err_floor` above " + FormatNumber(kNoiseShareLimit, "%g") +
-                ": the reference's own noise explains most of their `tv_err`. Where such a row's interval "
-                "overlaps `none`'s it is **unresolved: reference noise**, never a tie nor a win, unless that "
-                "noise's contrast is under " +
-                FormatNumber(100 * kVisibleContrast, "%g") + " % (" + std::to_string(faint) +
-                " rows: fainter than any visible flicker, the tie stands). " + std::to_string(unresolved) +
-                " rows (" + FormatNumber(100 * share, "%.1f") +
-                " %) are unresolved; a reference with more samples would resolve them. The aim is at most 5 % of "
-                "the rows" +
-                (share <= 0.05 ? std::string(", met.") : std::string(", not met in this store.")));
+  doc.Paragraph(
+      std::to_string(noisy.size()) + " of " + std::to_string(rows.size()) + " rows have `tv_err_floor` above " +
+      FormatNumber(kNoiseShareLimit, "%g") +
+      ": the reference's own noise explains most of their `tv_err`. It explains little of a *comparison*: " +
+      std::to_string(paired) + " of the " + std::to_string(compared) +
+      " comparisons with `none` are paired (both rows measured on the same bootstrap draws against the same "
+      "reference), and in their `tv_err` difference that noise cancels but for a cross term, which widens the "
+      "difference's interval (docs/metrics.md, \"Paired intervals\"). A tie is **unresolved: reference noise** "
+      "when the noise is over " +
+      FormatNumber(100 * kNoiseShareLimit, "%g") +
+      " % of what it compares (the paired interval's half-width; unpaired, either row's `tv_err`), unless its "
+      "contrast is under " +
+      FormatNumber(100 * kVisibleContrast, "%g") + " % (" + std::to_string(faint) +
+      " rows: fainter than any visible flicker, the tie stands). " + std::to_string(unresolved) + " rows (" +
+      FormatNumber(100 * share, "%.1f") +
+      " %) are unresolved; a reference with more samples would resolve them. The aim is at most 5 % of the rows" +
+      (share <= 0.05 ? std::string(", met.") : std::string(", not met in this store.")));
   std::vector<std::string> items;
   for (const auto& [shot, count] : by_shot) items.push_back(shot + ": " + std::to_string(count) + " rows");
   if (!items.empty()) doc.List(items);

@@ -33,6 +33,10 @@ std::string Csv(const std::vector<JobResult>& rows) {
   // instruction counts of the row's kernel and of its batch's `none`.
   header.insert(header.end(), {"ref_contrast", "bench_ratio_lo", "bench_ratio_hi", "bench_repetitions", "kernel_alu",
                                "kernel_transcendental", "kernel_memory", "kernel_control", "none_kernel_total"});
+  // The paired comparison with the shot's `none` where their bootstrap
+  // draws pair: tv_err's difference to `none`'s, its 95 % interval, and the
+  // reference noise's share of that interval (decision_rule.h, NoiseShare).
+  header.insert(header.end(), {"tv_err_vs_none", "tv_err_vs_none_lo", "tv_err_vs_none_hi", "vs_none_noise_share"});
   // How many of the report's tables a row sits in: `none` and supersample-N
   // read no derivatives and join each derivative source's table of their shot.
   std::map<const JobResult*, int> tables;
@@ -107,6 +111,14 @@ std::string Csv(const std::vector<JobResult>& rows) {
     } else {
       fields.insert(fields.end(), {"", "", "", "", ""});
     }
+    const std::optional<PairedComparison> paired =
+        none == none_of.end() || none->second == &r ? std::nullopt
+                                                     : PairedTvErr(EvidenceOf(r), EvidenceOf(*none->second));
+    if (paired)
+      fields.insert(fields.end(), {CsvNumber(paired->difference), CsvNumber(paired->ci.lo), CsvNumber(paired->ci.hi),
+                                   CsvNumber(paired->noise_share)});
+    else
+      fields.insert(fields.end(), {"", "", "", ""});
     table.AddRow(fields);
   }
   return table.Text();

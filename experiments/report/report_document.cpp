@@ -131,6 +131,16 @@ std::string RatioWithInterval(double value, Interval ci, double none_value, Inte
   return WithInterval(value / none_value, ratio, "%.3g");
 }
 
+// tv_err's ratio to `none`, with the interval the decision rule used: of
+// the paired difference (relative to `none`'s tv_err) where the rows pair,
+// else both intervals' worst cases.
+std::string TvErrRatioText(const Evidence& e, const Evidence& none) {
+  const std::optional<PairedComparison> paired = PairedTvErr(e, none);
+  if (!paired || !(none.tv_err > 0)) return RatioWithInterval(e.tv_err, e.tv_err_ci, none.tv_err, none.tv_err_ci);
+  return WithInterval(e.tv_err / none.tv_err, {1 + paired->ci.lo / none.tv_err, 1 + paired->ci.hi / none.tv_err},
+                      "%.3g");
+}
+
 void ShotTable(Document& doc, const Group& group, bool has_video) {
   const std::string slug = Slug(group.key);
   doc.Heading(3, group.key);
@@ -198,7 +208,7 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
     std::string verdict = OutcomeText(outcome);
     if (r == lowest) verdict += ", lowest joint error";
     cells.push_back({Code(Label(*r)), WithInterval(e.joint, e.joint_ci, "%.3g"),
-                     RatioWithInterval(e.tv_err, e.tv_err_ci, base.tv_err, base.tv_err_ci),
+                     TvErrRatioText(e, base),
                      RatioWithInterval(e.spatial, e.spatial_ci, base.spatial, base.spatial_ci),
                      WithInterval(e.energy_bias, e.energy_ci, "%+.3f"),
                      CostText(r->cost), InstructionText(r->cost), verdict});

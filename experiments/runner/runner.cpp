@@ -148,6 +148,7 @@ Result<JobResult> MeasureExternal(const Job& job) {
   r.reference_id = ReferenceId(job);
   r.job = job;
   r.metrics = metrics::ToJson(*report);
+  if (report->ci95) r.draws = std::make_shared<const metrics::BootstrapDraws>(report->ci95->draws);
   if (auto sources = SourcesOf(job)) r.sources = sources->ToJson();
   r.gpu_ms_per_frame = job.external->ms_per_frame;
   r.revision = render::SourceRevision();
@@ -204,6 +205,7 @@ Result<JobResult> MeasureJob(const Job& job, const RunOptions& options) {
   r.reference_id = ReferenceIdFrom(job, *sources);
   r.job = job;
   r.metrics = metrics::ToJson(*report);
+  if (report->ci95) r.draws = std::make_shared<const metrics::BootstrapDraws>(report->ci95->draws);
   r.gpu_ms_per_frame = rendered->MeanGpuMs();
   r.revision = render::SourceRevision();
   r.core_version = sources->test.kernel;
@@ -354,12 +356,13 @@ Result<RunPlan> PlanRun(const std::vector<Job>& all_jobs, const RunOptions& opti
     rows = std::move(*all);
   }
   std::set<std::string> ids;
-  std::map<std::string, const JobResult*> by_description;
+  // Every stored version of a description: a store keeps the rows of
+  // earlier code beside the current ones (`shimmer prune` drops them).
+  std::map<std::string, std::vector<const JobResult*>> by_description;
   for (const JobResult& r : rows) {
     ids.insert(r.id);
     if (r.sources.is_null() && !r.job.external) ++plan.legacy_rows;
-    const JobResult*& seen = by_description[JobDescription(r.job)];
-    if (!seen || seen->sources.is_null()) seen = &r;  // a row with sources says more
+    by_description[JobDescription(r.job)].push_back(&r);
   }
   for (const Job& job : ShardOf(all_jobs, options.shard_index, options.shard_count)) {
     PlannedJob planned{job, JobId(job), {}};
@@ -371,12 +374,20 @@ Result<RunPlan> PlanRun(const std::vector<Job>& all_jobs, const RunOptions& opti
     auto now = SourcesOf(job);
     if (!now) return Prefixed("job " + job.scene + " " + job.material + " " + job.camera + " " + job.variant,
                               now.failure());
-    if (it == by_description.end())
+    if (it == by_description.end()) {
       planned.why = {"new job"};
-    else if (it->second->sources.is_null())
-      planned.why = {kLegacyRowReason};
-    else
-      planned.why = WhyRerun(job, JobSources::FromJson(it->second->sources), *now);
+    } else {
+      // What changed since the closest stored version: the fewest reasons
+      // (a row with sources says more than a legacy one).
+      for (const JobResult* stored : it->second) {
+        std::vector<std::string> why = stored->sources.is_null()
+                                           ? std::vector<std::string>{kLegacyRowReason}
+                                           : WhyRerun(job, JobSources::FromJson(stored->sources), *now);
+        const bool legacy_before = !planned.why.empty() && planned.why.front() == kLegacyRowReason;
+        if (planned.why.empty() || why.size() < planned.why.size() || (legacy_before && !stored->sources.is_null()))
+          planned.why = std::move(why);
+      }
+    }
     if (planned.why.empty()) planned.why = {"new job"};
     plan.to_run.push_back(std::move(planned));
   }

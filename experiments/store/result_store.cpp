@@ -96,6 +96,7 @@ Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, 
       return R::Failure(path + ": not a shimmer results store (it has no jobs table)");
     store->has_device_columns_ = columns.count("device") > 0;
     store->has_sources_column_ = columns.count("sources") > 0;
+    store->has_draws_column_ = columns.count("draws") > 0;
     store->has_verdict_tables_ = HasTable(db, "main", "shots") && HasTable(db, "main", "benchmarks");
     return store;
   }
@@ -105,12 +106,14 @@ Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, 
   if (Status s = store->Exec(kSchema); !s)
     return store->Failure(s.code() == ErrorCode::kIo ? "cannot write the results store"
                                                      : "not a shimmer results store");
-  // Stores from before the device (or sources) columns get them; their old rows read NULL.
+  // Stores from before the device (sources, draws) columns get them; their old rows read NULL.
   const std::set<std::string> columns = ColumnsOf(db, "main");
-  for (const char* column : {"device", "driver", "sources"})
-    if (!columns.count(column))
-      if (Status s = store->Exec(std::string("ALTER TABLE jobs ADD COLUMN ") + column + " TEXT;"); !s)
-        return store->Failure("cannot add the " + std::string(column) + " column");
+  for (const char* column : {"device TEXT", "driver TEXT", "sources TEXT", "draws BLOB"}) {
+    const std::string name = std::string(column).substr(0, std::string(column).find(' '));
+    if (!columns.count(name))
+      if (Status s = store->Exec(std::string("ALTER TABLE jobs ADD COLUMN ") + column + ";"); !s)
+        return store->Failure("cannot add the " + name + " column");
+  }
   if (!ColumnsOf(db, "main", "fits").count("map"))
     if (Status s = store->Exec(kFitsByMap); !s) {
       (void)store->Exec("ROLLBACK;");  // the failure reported is the one above
@@ -187,6 +190,12 @@ Status ResultStore::Insert(const JobResult& r) {
     sqlite3_bind_null(s.stmt, i++);
   else
     text(r.sources.dump());
+  if (r.draws) {
+    const std::string bytes = metrics::EncodeDraws(*r.draws);
+    sqlite3_bind_blob(s.stmt, i++, bytes.data(), int(bytes.size()), SQLITE_TRANSIENT);
+  } else {
+    sqlite3_bind_null(s.stmt, i++);
+  }
   if (sqlite3_step(s.stmt) != SQLITE_DONE) {
     Error e = Failure("cannot write job " + r.id);
     (void)Exec("ROLLBACK;");
@@ -210,8 +219,10 @@ Result<std::vector<JobResult>> ResultStore::Select(const std::string& where, con
   Statement s;
   const std::string device_columns = has_device_columns_ ? "device, driver" : "NULL, NULL";
   const std::string sources_column = has_sources_column_ ? "sources" : "NULL";
+  const std::string draws_column = has_draws_column_ ? "draws" : "NULL";
   const std::string sql = "SELECT id, reference_id, metrics, gpu_ms_per_frame, wall_s, revision, core_version, job, " +
-                          device_columns + ", " + sources_column + " FROM jobs " + where + " ORDER BY id";
+                          device_columns + ", " + sources_column + ", " + draws_column + " FROM jobs " + where +
+                          " ORDER BY id";
   if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &s.stmt, nullptr) != SQLITE_OK) return Failure("cannot read the jobs");
   if (!id.empty()) sqlite3_bind_text(s.stmt, 1, id.c_str(), -1, SQLITE_TRANSIENT);
   auto str = [&](int c) {
@@ -237,6 +248,12 @@ Result<std::vector<JobResult>> ResultStore::Select(const std::string& where, con
     r.core_version = str(6);
     r.device = str(8);
     r.driver = str(9);
+    if (const void* blob = sqlite3_column_blob(s.stmt, 11)) {
+      auto draws = metrics::DecodeDraws(
+          std::string_view(static_cast<const char*>(blob), size_t(sqlite3_column_bytes(s.stmt, 11))));
+      if (!draws) return R::Failure(path_ + ": job " + r.id + " is damaged (its bootstrap draws do not decode)");
+      r.draws = std::make_shared<const metrics::BootstrapDraws>(std::move(*draws));
+    }
     rows.push_back(std::move(r));
   }
   if (rc != SQLITE_DONE) return Failure("cannot read the jobs");

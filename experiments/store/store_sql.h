@@ -32,7 +32,8 @@ CREATE TABLE IF NOT EXISTS jobs (
   revision TEXT, core_version TEXT,
   finished_at TEXT DEFAULT (datetime('now')),
   device TEXT, driver TEXT,
-  sources TEXT
+  sources TEXT,
+  draws BLOB
 );
 CREATE TABLE IF NOT EXISTS shots (
   reference_id TEXT PRIMARY KEY,
@@ -145,7 +146,8 @@ inline constexpr const char* kJobColumns[] = {"id",
                              "finished_at",
                              "device",
                              "driver",
-                             "sources"};
+                             "sources",
+                             "draws"};
 
 inline std::string SqlQuote(const std::string& text) {
   std::string out = "'";

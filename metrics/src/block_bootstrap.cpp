@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 
 #include <opencv2/core.hpp>
@@ -46,7 +47,95 @@ double Variance(const std::vector<double>& x) {
   return stddev[0] * stddev[0] * static_cast<double>(x.size()) / static_cast<double>(x.size() - 1);
 }
 
+// The interval rule of TileBlockStatistics::Bootstrap on replicates of a
+// value: the percentile shape of `spread` (the joint replicates, or the
+// tiles-only ones when frames were not resampled), centred on the value and,
+// with `tiles` and `blocks`, scaled to the two-way random-effects variance.
+// Resampling tiles and blocks independently counts the tile x block
+// interaction three times (McCullagh 2000; Owen 2007): with V_J, V_T, V_B
+// the joint, tiles-only and blocks-only variances, the interaction is
+// V_J - V_T - V_B, and V_T + V_B - that is the variance of the estimate.
+Interval ScaledPercentile(double value, std::vector<double> spread, const std::vector<double>* tiles,
+                          const std::vector<double>* blocks) {
+  if (spread.size() < 2) return Interval{value, value};
+  double scale = 1;
+  if (tiles && blocks) {
+    const double vj = Variance(spread), vt = Variance(*tiles), vb = Variance(*blocks);
+    const double corrected = std::max({2 * (vt + vb) - vj, vt, vb});
+    scale = vj > 0 ? std::sqrt(corrected / vj) : 0.0;
+  }
+  std::sort(spread.begin(), spread.end());
+  // The percentile shape, centred on the estimate: the bootstrap median's
+  // offset from it is resampling bias (duplicated blocks shrink variances).
+  const double median = Quantile(spread, 0.5);
+  return Interval{value - scale * (median - Quantile(spread, 0.025)),
+                  value + scale * (Quantile(spread, 0.975) - median)};
+}
+
+std::uint64_t Mix(std::uint64_t hash, std::uint64_t value) {
+  SplitMix64 mix{hash ^ value};
+  return mix.Next();
+}
+
+constexpr char kDrawsMagic[] = "shimmer-draws-1";
+
 }  // namespace
+
+std::string EncodeDraws(const BootstrapDraws& draws) {
+  const std::uint32_t n = static_cast<std::uint32_t>(draws.tv_err.joint.size());
+  std::string out(kDrawsMagic, sizeof kDrawsMagic);
+  auto put = [&](const void* data, size_t bytes) { out.append(static_cast<const char*>(data), bytes); };
+  put(&draws.key, sizeof draws.key);
+  put(&n, sizeof n);
+  for (const Replicates* r : {&draws.tv_err, &draws.relmse})
+    for (const std::vector<float>* v : {&r->joint, &r->tiles_only, &r->blocks_only}) {
+      std::vector<float> padded(*v);
+      padded.resize(n, std::nanf(""));
+      put(padded.data(), n * sizeof(float));
+    }
+  return out;
+}
+
+std::optional<BootstrapDraws> DecodeDraws(std::string_view bytes) {
+  const size_t head = sizeof kDrawsMagic + sizeof(std::uint64_t) + sizeof(std::uint32_t);
+  if (bytes.size() < head || std::memcmp(bytes.data(), kDrawsMagic, sizeof kDrawsMagic) != 0) return std::nullopt;
+  BootstrapDraws draws;
+  std::uint32_t n = 0;
+  std::memcpy(&draws.key, bytes.data() + sizeof kDrawsMagic, sizeof draws.key);
+  std::memcpy(&n, bytes.data() + sizeof kDrawsMagic + sizeof draws.key, sizeof n);
+  if (bytes.size() != head + 6 * size_t(n) * sizeof(float)) return std::nullopt;
+  const char* at = bytes.data() + head;
+  for (Replicates* r : {&draws.tv_err, &draws.relmse})
+    for (std::vector<float>* v : {&r->joint, &r->tiles_only, &r->blocks_only}) {
+      v->resize(n);
+      std::memcpy(v->data(), at, n * sizeof(float));
+      at += n * sizeof(float);
+    }
+  return draws;
+}
+
+std::optional<Interval> PairedDifference(double a, const Replicates& ra, double b, const Replicates& rb) {
+  const size_t n = ra.joint.size();
+  if (n < 2 || rb.joint.size() != n || ra.tiles_only.size() != n || rb.tiles_only.size() != n ||
+      ra.blocks_only.size() != n || rb.blocks_only.size() != n)
+    return std::nullopt;
+  std::vector<double> joint, tiles, blocks;
+  for (size_t i = 0; i < n; ++i) {
+    const double j = double(ra.joint[i]) - rb.joint[i], t = double(ra.tiles_only[i]) - rb.tiles_only[i],
+                 k = double(ra.blocks_only[i]) - rb.blocks_only[i];
+    // A replicate is used whole or not at all, so the three stay paired.
+    if (std::isfinite(j) && std::isfinite(t) && std::isfinite(k))
+      joint.push_back(j), tiles.push_back(t), blocks.push_back(k);
+  }
+  if (joint.size() < 2) return std::nullopt;
+  return ScaledPercentile(a - b, std::move(joint), &tiles, &blocks);
+}
+
+double PairedNoiseSigma(double ref_noise, double tv_test_a, double tv_test_b, int frames, long long pixels) {
+  if (!(ref_noise > 0) || frames < 2 || pixels <= 0) return 0;
+  const double spread = std::sqrt(std::max(tv_test_a, 0.0)) + std::sqrt(std::max(tv_test_b, 0.0));
+  return 2 * std::sqrt(ref_noise * spread * spread / ((frames - 1) * double(pixels)));
+}
 
 int FrameBlockLength(int frames) {
   const int length = static_cast<int>(std::lround(std::cbrt(static_cast<double>(frames))));
@@ -199,33 +288,17 @@ TileBlockStatistics::Intervals TileBlockStatistics::Bootstrap(const Estimates& p
   });
 
   using Get = std::function<std::optional<double>(const Estimates&)>;
+  auto collect = [&](const std::vector<Estimates>& from, const Get& get) {
+    std::vector<double> x;
+    for (const Estimates& e : from)
+      if (auto v = get(e); v && std::isfinite(*v)) x.push_back(*v);
+    return x;
+  };
   auto interval = [&](std::optional<double> value, const Get& get, bool frames_resampled) -> std::optional<Interval> {
     if (!value) return std::nullopt;
-    auto collect = [&](const std::vector<Estimates>& from) {
-      std::vector<double> x;
-      for (const Estimates& e : from)
-        if (auto v = get(e); v && std::isfinite(*v)) x.push_back(*v);
-      return x;
-    };
-    std::vector<double> spread = collect(frames_resampled ? joint : tiles_only);
-    if (spread.size() < 2) return Interval{*value, *value};
-    double scale = 1;
-    if (frames_resampled) {
-      // Resampling tiles and blocks independently counts the tile x block
-      // interaction three times (McCullagh 2000; Owen 2007): with V_J, V_T,
-      // V_B the joint, tiles-only and blocks-only variances, the interaction
-      // is V_J - V_T - V_B, and V_T + V_B - that is the variance of the
-      // estimate under the two-way random-effects model.
-      const double vj = Variance(spread), vt = Variance(collect(tiles_only)), vb = Variance(collect(blocks_only));
-      const double corrected = std::max({2 * (vt + vb) - vj, vt, vb});
-      scale = vj > 0 ? std::sqrt(corrected / vj) : 0.0;
-    }
-    std::sort(spread.begin(), spread.end());
-    // The percentile shape, centred on the estimate: the bootstrap median's
-    // offset from it is resampling bias (duplicated blocks shrink variances).
-    const double median = Quantile(spread, 0.5);
-    return Interval{*value - scale * (median - Quantile(spread, 0.025)),
-                    *value + scale * (Quantile(spread, 0.975) - median)};
+    if (!frames_resampled) return ScaledPercentile(*value, collect(tiles_only, get), nullptr, nullptr);
+    const std::vector<double> tiles = collect(tiles_only, get), blocks = collect(blocks_only, get);
+    return ScaledPercentile(*value, collect(joint, get), &tiles, &blocks);
   };
   Intervals out;
   out.tv_err = interval(
@@ -243,6 +316,22 @@ TileBlockStatistics::Intervals TileBlockStatistics::Bootstrap(const Estimates& p
   // The spectrum needs the frames in order: only tiles are resampled for it.
   out.flicker_index = interval(
       point.flicker_index, [](const Estimates& e) { return std::optional(e.flicker_index); }, false);
+  // The draws' key: what decides them (tile_count and k_count draws per
+  // replicate from the seed) and the region they fell on.
+  std::uint64_t key = Mix(Mix(settings.seed, static_cast<std::uint64_t>(replicates)), draws_per_replicate);
+  for (int frames : block_frames_) key = Mix(key, static_cast<std::uint64_t>(frames));
+  for (int t = 0; t < tile_count; ++t)
+    key = Mix(key, static_cast<std::uint64_t>(rows_[static_cast<size_t>(t) * stride_ + kPixels]));
+  out.draws.key = key;
+  auto keep = [&](Replicates& r, auto member) {
+    for (int i = 0; i < replicates; ++i) {
+      r.joint.push_back(static_cast<float>(joint[i].*member));
+      r.tiles_only.push_back(static_cast<float>(tiles_only[i].*member));
+      r.blocks_only.push_back(static_cast<float>(blocks_only[i].*member));
+    }
+  };
+  keep(out.draws.tv_err, &Estimates::tv_err);
+  keep(out.draws.relmse, &Estimates::relmse);
   return out;
 }
 

@@ -307,6 +307,7 @@ void MetricsAccumulator::AddIntervals(MetricsReport* report, const cv::Mat& good
       widen(ci.energy_bias, *report->energy_bias,
             std::abs((1 + *report->energy_bias) / reference_sum) * std::sqrt(noise));
     const double relmse_sigma = std::sqrt(relmse_noise) / (used * frames);
+    if (report->relmse) report->relmse_noise_sigma = relmse_sigma;
     if (ci.relmse) widen(ci.relmse, *report->relmse, relmse_sigma);
     // The parts: the noise of their sum bounds each one's (to first order),
     // and independent reference noise adds mean(w s^2) to the temporal

@@ -238,6 +238,7 @@ nlohmann::json ToJson(const MetricsReport& r) {
   if (r.tv_err_floor) j["tv_err_floor"] = *r.tv_err_floor;
   if (r.ref_noise) j["ref_noise"] = *r.ref_noise;
   if (r.ref_mean) j["ref_mean"] = *r.ref_mean;
+  if (r.relmse_noise_sigma) j["relmse_noise_sigma"] = *r.relmse_noise_sigma;
   if (r.warp_err) j["warp_err"] = *r.warp_err;
   if (r.sparkles) {
     const SparkleReport& s = *r.sparkles;

@@ -70,7 +70,13 @@ std::string ExpectedVerdict(const Record& v, const Record& none) {
   if (std::isnan(Number(v, "tv_err_lo")) || std::isnan(Number(none, "tv_err_lo"))) return "n/a (no intervals)";
   auto near = [](double a, double b) { return !std::isnan(a) && !std::isnan(b) && b != 0 && std::abs(a / b - 1) <= 0.02; };
   if (near(tv, tv_n) && (std::isnan(joint) || near(joint, joint_n))) return "no effect";
-  if (Number(v, "tv_err_hi") < Number(none, "tv_err_lo")) {
+  // Paired with `none` (same bootstrap draws): the difference's interval
+  // decides, and the noise's share of it; else the rows' own intervals.
+  const bool paired = !std::isnan(Number(v, "tv_err_vs_none_lo"));
+  const bool steadier = paired ? Number(v, "tv_err_vs_none_hi") < 0 : Number(v, "tv_err_hi") < Number(none, "tv_err_lo");
+  const bool less_steady =
+      paired ? Number(v, "tv_err_vs_none_lo") > 0 : Number(v, "tv_err_lo") > Number(none, "tv_err_hi");
+  if (steadier) {
     std::string sp = std::isnan(Number(v, "relmse_spatial_lo")) ? "relmse" : "relmse_spatial";
     const double lo = Number(v, sp + "_lo"), hi_n = Number(none, sp + "_hi");
     if (!std::isnan(lo) && !std::isnan(hi_n) && lo > 1.5 * hi_n) return "steadier, blurrier";
@@ -81,12 +87,14 @@ std::string ExpectedVerdict(const Record& v, const Record& none) {
     if (sparkles < 0.5 || sparkles > 2) return "steadier, loses the glints";
     return "better";
   }
-  if (Number(v, "tv_err_lo") > Number(none, "tv_err_hi")) return "less steady";
-  // Reference noise over half of either tv_err hides a difference, unless
-  // its contrast (ref_contrast) is under 1 %: too faint to hide a visible one.
+  if (less_steady) return "less steady";
+  // Reference noise over half of the comparison's uncertainty (paired) or of
+  // either tv_err (unpaired) hides a difference, unless its contrast
+  // (ref_contrast) is under 1 %: too faint to hide a visible one.
   const double contrast = std::max(Number(v, "ref_contrast"), Number(none, "ref_contrast"));
-  if ((Number(v, "tv_err_floor") > 0.5 || Number(none, "tv_err_floor") > 0.5) && !(contrast < 0.01))
-    return "unresolved: reference noise";
+  const bool noisy = paired ? Number(v, "vs_none_noise_share") > 0.5
+                            : Number(v, "tv_err_floor") > 0.5 || Number(none, "tv_err_floor") > 0.5;
+  if (noisy && !(contrast < 0.01)) return "unresolved: reference noise";
   return "≈ none";
 }
 

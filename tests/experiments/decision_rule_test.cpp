@@ -132,6 +132,69 @@ TEST(DecisionRule, ATieUnderNoiseTooFaintToSeeIsATie) {
   EXPECT_EQ(Decide(Of(faint), Of(kNone)), Outcome::kUnresolved);
 }
 
+// Bootstrap draws whose replicates share a common part (the resampling of
+// what both rows see: the same tiles, frames and reference) and carry a
+// small part of their own: paired, the common part cancels.
+std::shared_ptr<const metrics::BootstrapDraws> Draws(double value, double own, std::uint64_t key,
+                                                     std::uint64_t seed) {
+  auto draws = std::make_shared<metrics::BootstrapDraws>();
+  draws->key = key;
+  for (int i = 0; i < 1000; ++i) {
+    const double common = 0.3 * std::sin(0.7 * i) * std::cos(1.3 * i);  // the same in every row
+    const double mine = own * std::sin(double(seed) * 12.9898 + 78.233 * i);
+    const float x = float(value + common + mine);
+    for (metrics::Replicates* r : {&draws->tv_err, &draws->relmse}) {
+      r->joint.push_back(x), r->tiles_only.push_back(x), r->blocks_only.push_back(x);
+    }
+  }
+  return draws;
+}
+
+JobResult PairedRow(const std::string& variant, const RowNumbers& n, double own, std::uint64_t key,
+                    std::uint64_t seed) {
+  JobResult r = Row("sphere", "ggx:0.01", "orbit", variant, n);
+  r.draws = Draws(n.tv_err, own, key, seed);
+  r.metrics["frames"] = 48, r.metrics["pixels"] = 10, r.metrics["tv_test"] = 1.0;
+  return r;
+}
+
+TEST(DecisionRule, RowsOnTheSameDrawsCompareTheirDifference) {
+  // Intervals of ±0.5 overlap (0.8 against 1): unpaired, a tie.
+  RowNumbers v = kNone, n = kNone;
+  v.tv_err = 0.8, v.tv_half = n.tv_half = 0.5;
+  EXPECT_EQ(Decide(Of(v), Of(n)), Outcome::kTied);
+  // Paired, the common spread cancels: the difference's interval is about
+  // ±0.02 around -0.2.
+  const JobResult a = PairedRow("v", v, 0.005, 7, 1), b = PairedRow("none", n, 0.005, 7, 2);
+  const auto d = PairedTvErr(EvidenceOf(a), EvidenceOf(b));
+  ASSERT_TRUE(d);
+  EXPECT_NEAR(d->difference, -0.2, 1e-12);
+  EXPECT_LT(d->ci.hi, -0.15);
+  EXPECT_GT(d->ci.lo, -0.25);
+  EXPECT_EQ(Decide(EvidenceOf(a), EvidenceOf(b)), Outcome::kBetter);
+  // Other draws (another region): unpaired again.
+  const JobResult other = PairedRow("none", n, 0.005, 8, 2);
+  EXPECT_FALSE(PairedTvErr(EvidenceOf(a), EvidenceOf(other)));
+  EXPECT_EQ(Decide(EvidenceOf(a), EvidenceOf(other)), Outcome::kTied);
+}
+
+TEST(DecisionRule, APairedTieIsUnresolvedOnlyWhereTheNoiseCrossTermDominatesIt) {
+  RowNumbers v = kNone, n = kNone;
+  v.tv_err = 0.97;  // 3 % apart: not "no effect"
+  v.floor = n.floor = 0.99;  // unpaired, the noise is 99 % of each tv_err
+  v.ref_noise = n.ref_noise = 1e-6, v.ref_mean = n.ref_mean = 1e-3;  // contrast 100 %: visible
+  // A paired tie whose own spread (about ±0.07) dwarfs the cross term of a faint
+  // F = 1e-6 (sigma = 2 sqrt(F (1 + 1)^2 / (47 * 10)) = 1.8e-4): a tie, not unresolved.
+  JobResult a = PairedRow("v", v, 0.1, 7, 1), b = PairedRow("none", n, 0.1, 7, 2);
+  EXPECT_LT(NoiseShare(EvidenceOf(a), EvidenceOf(b)), 0.1);
+  EXPECT_EQ(Decide(EvidenceOf(a), EvidenceOf(b)), Outcome::kTied);
+  // F = 1 (sigma 0.18, 1.96 sigma = 0.36 against the replicates' 0.07): the
+  // cross term is the comparison's uncertainty, and the tie is unresolved.
+  a.metrics["ref_noise"] = b.metrics["ref_noise"] = 1.0;
+  EXPECT_GT(NoiseShare(EvidenceOf(a), EvidenceOf(b)), 0.9);
+  EXPECT_EQ(Decide(EvidenceOf(a), EvidenceOf(b)), Outcome::kUnresolved);
+}
+
 TEST(DecisionRule, LessSteadyAndUnknown) {
   RowNumbers worse;
   worse.tv_err = 3;

@@ -64,6 +64,11 @@ TEST(ResultStore, InsertThenFindAndReadBack) {
   JobResult r = MakeResult("k16-beckmann-rect", 0.5, 3.0);
   r.device = "test device";
   r.driver = "test driver 1.0";
+  auto draws = std::make_shared<metrics::BootstrapDraws>();
+  draws->key = 0x1234'5678'9abc'def0ULL;
+  draws->tv_err = {{1.5f, 2.5f}, {1.25f, 2.25f}, {1.f, 2.f}};
+  draws->relmse = {{0.5f, 0.25f}, {0.125f, 0.f}, {3.f, 4.f}};
+  r.draws = draws;
   EXPECT_FALSE(*store->Has(r.id));
   ASSERT_TRUE(store->Insert(r));
   EXPECT_TRUE(*store->Has(r.id));
@@ -74,6 +79,11 @@ TEST(ResultStore, InsertThenFindAndReadBack) {
   EXPECT_EQ(rows[0].job.ToJson(), r.job.ToJson());
   EXPECT_EQ(rows[0].metrics, r.metrics);
   EXPECT_DOUBLE_EQ(rows[0].gpu_ms_per_frame, 1.5);
+  // The bootstrap draws come back as they went in.
+  ASSERT_TRUE(rows[0].draws);
+  EXPECT_EQ(rows[0].draws->key, draws->key);
+  EXPECT_EQ(rows[0].draws->tv_err.blocks_only, draws->tv_err.blocks_only);
+  EXPECT_EQ(rows[0].draws->relmse.tiles_only, draws->relmse.tiles_only);
   // Reopening sees the same row: it was committed.
   store.reset();
   auto again = ResultStore::Open((dir.path() / "r.db").string(), ResultStore::Mode::kReadOnly);
@@ -87,6 +97,10 @@ TEST(ResultStore, MergedShardsEqualOneStore) {
   const std::string all = (dir.path() / "all.db").string();
   std::vector<JobResult> results;
   for (int i = 0; i < 6; ++i) results.push_back(MakeResult("k16-beckmann-rect", 0.1 * (i + 1), i));
+  auto draws = std::make_shared<metrics::BootstrapDraws>();
+  draws->key = 42;
+  draws->tv_err = draws->relmse = {{1.f, 2.f, 3.f}, {1.f, 2.f, 3.f}, {1.f, 2.f, 3.f}};
+  results[3].draws = draws;
   {
     auto sa = ResultStore::Open(a);
     auto sb = ResultStore::Open(b);
@@ -109,6 +123,11 @@ TEST(ResultStore, MergedShardsEqualOneStore) {
     auto row = std::find_if(rows.begin(), rows.end(), [&](const JobResult& x) { return x.id == r.id; });
     ASSERT_NE(row, rows.end());
     EXPECT_EQ(row->device, r.device);
+    // Bootstrap draws merge with their row; rows without stay without.
+    ASSERT_EQ(bool(row->draws), bool(r.draws));
+    if (r.draws) {
+      EXPECT_EQ(row->draws->tv_err.joint, r.draws->tv_err.joint);
+    }
   }
 }
 

@@ -305,3 +305,129 @@ TEST(MetricsIntervals, TvErrFloorRecoversTheReferenceNoiseShareFromStderrY) {
 
 }  // namespace
 }  // namespace shimmer::metrics
+
+namespace shimmer::metrics {
+namespace {
+
+// Two tests measured against one noisy reference R0 + s n_t: A = R0 +
+// sigma_a m_t, B = R0 + sigma_b m'_t. The reference's noise (F = s^2) is
+// most of each tv_err, and lowers each interval's lower end by F, so their
+// intervals overlap; paired, the noise cancels and the difference
+// sigma_a^2 - sigma_b^2 is measured.
+struct PairedRun {
+  MetricsReport a, b;
+};
+PairedRun SimulatePair(double sigma_a, double sigma_b, double s, std::uint64_t seed) {
+  MetricsAccumulator a(Setup(true)), b(Setup(true));
+  std::mt19937_64 random(seed);
+  std::normal_distribution<double> normal;
+  cv::Mat Ta(kSize, kSize, CV_32F), Tb(kSize, kSize, CV_32F), R(kSize, kSize, CV_32F);
+  const cv::Mat stderr_y(kSize, kSize, CV_32F, cv::Scalar(s));
+  for (int t = 0; t < kFrames; ++t) {
+    for (int y = 0; y < kSize; ++y)
+      for (int x = 0; x < kSize; ++x) {
+        const double r0 = ReferenceAt(x, y);
+        R.at<float>(y, x) = static_cast<float>(r0 + s * normal(random));
+        Ta.at<float>(y, x) = static_cast<float>(r0 + sigma_a * normal(random));
+        Tb.at<float>(y, x) = static_cast<float>(r0 + sigma_b * normal(random));
+      }
+    a.AddFrame(Ta, R, cv::Mat(), "a", "r", stderr_y);
+    b.AddFrame(Tb, R, cv::Mat(), "b", "r", stderr_y);
+  }
+  PairedRun run;
+  EXPECT_TRUE(a.Finish(&run.a));
+  EXPECT_TRUE(b.Finish(&run.b));
+  return run;
+}
+
+std::optional<Interval> PairedTvErr(const PairedRun& run) {
+  const BootstrapDraws &da = run.a.ci95->draws, &db = run.b.ci95->draws;
+  EXPECT_EQ(da.key, db.key);
+  auto d = PairedDifference(*run.a.tv_err, da.tv_err, *run.b.tv_err, db.tv_err);
+  if (!d) return d;
+  const double sigma =
+      PairedNoiseSigma(*run.a.ref_noise, run.a.tv_test, run.b.tv_test, run.a.frames, run.a.pixels);
+  const double noise = 1.959963984540054 * sigma, x = *run.a.tv_err - *run.b.tv_err;
+  return Interval{x - std::hypot(x - d->lo, noise), x + std::hypot(d->hi - x, noise)};
+}
+
+TEST(PairedIntervals, SeparateWhatTheReferenceNoiseHidesAndCoverTheTrueDifference) {
+  const double sigma_a = 0.05, sigma_b = 0.065, s = 0.2;
+  const double truth = (sigma_a * sigma_a - sigma_b * sigma_b) * ExpectedSampleVarianceFactor(0, kFrames);
+  int separated_unpaired = 0, separated_paired = 0, covered = 0;
+  const int trials = 40;
+  for (int trial = 0; trial < trials; ++trial) {
+    const PairedRun run = SimulatePair(sigma_a, sigma_b, s, 500 + trial);
+    ASSERT_TRUE(run.a.ci95 && run.b.ci95 && run.a.tv_err_floor);
+    EXPECT_GT(*run.a.tv_err_floor, 0.85);  // the noise is most of tv_err
+    const Interval ua = *run.a.ci95->tv_err, ub = *run.b.ci95->tv_err;
+    separated_unpaired += ua.hi < ub.lo;
+    const auto d = PairedTvErr(run);
+    ASSERT_TRUE(d);
+    separated_paired += d->hi < 0;
+    covered += d->lo <= truth && truth <= d->hi;
+  }
+  std::printf("paired: separated %d/%d (unpaired %d), covered %d/%d\n", separated_paired, trials,
+              separated_unpaired, covered, trials);
+  EXPECT_EQ(separated_unpaired, 0);
+  EXPECT_GE(separated_paired, trials * 9 / 10);
+  EXPECT_GE(covered, trials * 85 / 100);
+}
+
+TEST(PairedIntervals, AVariantAgainstItselfIsTiedAndUnpairedRegionsDoNotPair) {
+  const PairedRun run = SimulatePair(0.05, 0.05, 0.2, 3);
+  const BootstrapDraws& da = run.a.ci95->draws;
+  const auto self = PairedDifference(*run.a.tv_err, da.tv_err, *run.a.tv_err, da.tv_err);
+  ASSERT_TRUE(self);
+  EXPECT_EQ(self->lo, 0);
+  EXPECT_EQ(self->hi, 0);
+  // Same noise level, independent draws: tied (the interval holds 0).
+  const auto d = PairedTvErr(run);
+  ASSERT_TRUE(d);
+  EXPECT_LT(d->lo, 0);
+  EXPECT_GT(d->hi, 0);
+  // Replicates of other lengths do not pair.
+  Replicates shorter = da.tv_err;
+  shorter.joint.pop_back();
+  EXPECT_FALSE(PairedDifference(1, shorter, 1, da.tv_err));
+}
+
+TEST(PairedIntervals, DrawsSurviveTheirEncodingAndDamageIsCaught) {
+  const PairedRun run = SimulatePair(0.05, 0.06, 0.1, 4);
+  const BootstrapDraws& draws = run.a.ci95->draws;
+  ASSERT_EQ(draws.tv_err.joint.size(), 1000u);
+  const std::string bytes = EncodeDraws(draws);
+  const auto back = DecodeDraws(bytes);
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->key, draws.key);
+  EXPECT_EQ(back->tv_err.joint, draws.tv_err.joint);
+  EXPECT_EQ(back->tv_err.blocks_only, draws.tv_err.blocks_only);
+  EXPECT_EQ(back->relmse.tiles_only, draws.relmse.tiles_only);
+  EXPECT_FALSE(DecodeDraws(bytes.substr(0, bytes.size() - 1)));
+  EXPECT_FALSE(DecodeDraws("not draws"));
+}
+
+AccumulatorSetup SetupWithoutOnePixel(bool without) {
+  AccumulatorSetup setup = Setup();
+  if (without) setup.region.at<unsigned char>(0, 0) = 0;
+  return setup;
+}
+
+TEST(PairedIntervals, RegionsOfOtherPixelsDrawOtherwise) {
+  MetricsAccumulator full(SetupWithoutOnePixel(false)), cut(SetupWithoutOnePixel(true));
+  cv::Mat T(kSize, kSize, CV_32F, cv::Scalar(1)), R(kSize, kSize, CV_32F, cv::Scalar(1));
+  std::mt19937_64 random(5);
+  std::normal_distribution<float> normal;
+  for (int t = 0; t < kFrames; ++t) {
+    for (int i = 0; i < kSize * kSize; ++i) T.at<float>(i) = 1 + 0.1f * normal(random);
+    full.AddFrame(T, R, cv::Mat(), "t", "r");
+    cut.AddFrame(T, R, cv::Mat(), "t", "r");
+  }
+  MetricsReport a, b;
+  ASSERT_TRUE(full.Finish(&a));
+  ASSERT_TRUE(cut.Finish(&b));
+  EXPECT_NE(a.ci95->draws.key, b.ci95->draws.key);
+}
+
+}  // namespace
+}  // namespace shimmer::metrics

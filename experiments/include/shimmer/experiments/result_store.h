@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "shimmer/core/result.h"
+#include "shimmer/metrics/block_bootstrap.h"
 #include "shimmer/experiments/job.h"
 #include "shimmer/shading/shading.h"
 
@@ -109,6 +110,10 @@ struct JobResult {
   nlohmann::json sources;
   std::string device;  // the Vulkan device that rendered it, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
   std::string driver;  // its driver and version, so that merged shards stay distinguishable
+  // The metrics' bootstrap draws of tv_err and relmse, for paired
+  // comparisons with the shot's other rows; null in external rows and
+  // stores measured before them.
+  std::shared_ptr<const metrics::BootstrapDraws> draws;
   // Joined when read from a store: the shot's convergence check (by
   // reference_id) and the benchmark cost of this variant on this device.
   std::optional<ShotCheck> shot;
@@ -185,6 +190,7 @@ class ResultStore {
   std::string path_;
   bool has_device_columns_ = true;
   bool has_sources_column_ = true;
+  bool has_draws_column_ = true;
   bool has_verdict_tables_ = true;  // shots and benchmarks (a read-only old store may lack them)
   bool writable_ = false;           // opened kReadWrite and switched to WAL
 };

@@ -5,6 +5,8 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace shimmer::metrics {
@@ -22,6 +24,41 @@ int FrameBlockLength(int frames);
 struct Interval {
   double lo = 0, hi = 0;
 };
+
+// One metric's bootstrap replicates: the joint resample's, and the same
+// draws' tiles alone and blocks alone (the variance correction's).
+struct Replicates {
+  std::vector<float> joint, tiles_only, blocks_only;
+};
+
+// What a bootstrap drew for the metrics a comparison ranks. Two rows with
+// the same `key` were resampled with the same tiles and frame blocks in
+// every replicate (same seed, replicate count, frame blocks and per-tile
+// pixel counts of the region): their replicates pair, and a difference
+// between them is measured without what the rows share, the reference's
+// noise first (PairedDifference; docs/metrics.md, "Paired intervals").
+struct BootstrapDraws {
+  std::uint64_t key = 0;
+  Replicates tv_err, relmse;
+};
+// A compact binary form for a results store (little-endian floats), and
+// back; nullopt for bytes that are not one.
+std::string EncodeDraws(const BootstrapDraws& draws);
+std::optional<BootstrapDraws> DecodeDraws(std::string_view bytes);
+
+// The 95 % interval of a - b, a and b one metric of two rows whose draws
+// have the same key, by the interval rule of TileBlockStatistics::Bootstrap
+// applied to the replicates' differences. nullopt when the replicates do
+// not pair (different counts) or are too few.
+std::optional<Interval> PairedDifference(double a, const Replicates& ra, double b, const Replicates& rb);
+
+// The standard deviation that the reference's noise still adds to a paired
+// tv_err difference of two test sequences T_a, T_b measured against one
+// reference R + n: the noise cancels but for -2 cov_t(T_a - T_b, n) per
+// pixel, whose variance is s^2 var_t(T_a - T_b) / (N - 1); averaged over
+// `pixels` independent pixels, with F = mean s^2 and mean var_t(T_a - T_b)
+// bounded by (sqrt(tv_test_a) + sqrt(tv_test_b))^2 (Minkowski).
+double PairedNoiseSigma(double ref_noise, double tv_test_a, double tv_test_b, int frames, long long pixels);
 
 // What the bootstrap resamples: one row of sums per tile, each over the
 // tile's good region pixels, split by frame block. Values are shifted per
@@ -70,6 +107,7 @@ class TileBlockStatistics {
 
   struct Intervals {
     std::optional<Interval> tv_err, tv_ratio, energy_bias, relmse, relmse_temporal, relmse_spatial, flicker_index;
+    BootstrapDraws draws;  // of tv_err and relmse, for paired comparisons
   };
   // The 95 % intervals about `point` (the metrics as computed by the pass).
   Intervals Bootstrap(const Estimates& point, const BootstrapSettings& settings) const;

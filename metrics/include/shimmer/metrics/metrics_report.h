@@ -94,6 +94,10 @@ struct MetricsReport {
   // smallest visible flicker (experiments/report/decision_rule.h).
   std::optional<double> ref_noise;
   std::optional<double> ref_mean;
+  // The standard deviation the reference's noise adds to relmse (the delta
+  // method's sigma that widens its interval): a paired relmse difference is
+  // widened by the two rows' sum.
+  std::optional<double> relmse_noise_sigma;
   // With MetricsOptions::sparkle_threshold > 0.
   std::optional<SparkleReport> sparkles;
 

@@ -14,7 +14,7 @@ namespace shimmer::cli {
 namespace {
 
 struct FitCliOptions {
-  std::string spec, db, work, out, device;
+  std::string spec, db, work, out, device, from_json;
   std::vector<std::string> variant_files;
   bool keep_frames = false;
 };
@@ -35,6 +35,16 @@ void Run(const FitCliOptions& o) {
   // Found before the fits: the report would be lost after hours of renders.
   const std::string out = o.out.empty() ? (std::filesystem::path("results") / spec.name).string() : o.out;
   RequireCreatableDirectory(o.out.empty() ? "the report directory" : "--out", out);
+  if (!o.from_json.empty()) {
+    // The report again, from the fits a run wrote: nothing rendered.
+    if (!o.variant_files.empty()) throw UsageError("--from-json takes the fits as they are: no --variant-file");
+    const experiments::FitOutcome outcome = Take(experiments::ReadFitOutcome(o.from_json));
+    std::vector<std::string> warnings;
+    Check(experiments::WriteFitReport(outcome, spec, out, &warnings));
+    for (const std::string& w : warnings) std::fprintf(stderr, "shimmer: warning: %s\n", w.c_str());
+    std::printf("fit: %s/fit.md (from %s, nothing rendered)\n", out.c_str(), o.from_json.c_str());
+    return;
+  }
   experiments::RunOptions ro;
   NewDirectories dirs;
   StorePaths(spec.name, o.db, o.work, "fit.db", &ro, &dirs);
@@ -70,6 +80,9 @@ void AddFitCommand(CLI::App& app) {
   cmd->add_option("-o,--out", o->out, "Report directory (default results/<spec name>)");
   cmd->add_flag("--keep-frames", o->keep_frames, "Keep rendered frames after measuring");
   cmd->add_option("--device", o->device, "Vulkan device name substring");
+  cmd->add_option("--from-json", o->from_json,
+                  "Write the report (fit.md, fit.json, plots) again from a fit.json shimmer fit wrote, rendering "
+                  "nothing (the closed forms are fitted again)");
   cmd->add_option("--variant-file", o->variant_files,
                   "Also fit a user variant's GLSL file (docs/variants.md) in every fit entry (repeatable)");
   cmd->callback([o] { Run(*o); });

@@ -159,6 +159,21 @@ nlohmann::json ToJson(const ObjectiveValue& v) {
   return {{"j", v.j}, {"j_ci95_half_width", v.half_width}, {"shots", shots}};
 }
 
+ObjectiveValue ObjectiveFromJson(const nlohmann::json& j) {
+  ObjectiveValue v;
+  v.j = j.at("j").get<double>();
+  v.half_width = j.at("j_ci95_half_width").get<double>();
+  for (const nlohmann::json& t : j.value("shots", nlohmann::json::array())) {
+    ShotTerms s;
+    s.scene = t.at("scene").get<std::string>(), s.camera = t.at("camera").get<std::string>();
+    s.flicker = t.at("flicker_index").get<double>(), s.flicker_none = t.at("flicker_index_none").get<double>();
+    s.relmse = t.at("relmse").get<double>(), s.relmse_none = t.at("relmse_none").get<double>();
+    s.bias = t.at("energy_bias").get<double>(), s.j = t.at("j").get<double>();
+    v.shots.push_back(std::move(s));
+  }
+  return v;
+}
+
 }  // namespace
 
 double ShotObjective(const FitWeights& w, const ShotTerms& t) {
@@ -203,6 +218,60 @@ nlohmann::json MaterialFit::ToJson() const {
                       {"defaults", defaults_json}};
   if (!map.empty()) j["map"] = map;  // fits not per map keep their JSON as it was
   return j;
+}
+
+MaterialFit MaterialFit::FromJson(const nlohmann::json& j) {
+  MaterialFit f;
+  f.variant = j.at("variant").get<std::string>(), f.param = j.at("param").get<std::string>();
+  f.material = j.at("material").get<std::string>(), f.ndf = j.at("ndf").get<std::string>();
+  f.map = j.value("map", std::string());
+  f.alpha = j.at("alpha").get<double>();
+  f.lo = j.at("bounds").at(0).get<double>(), f.hi = j.at("bounds").at(1).get<double>();
+  f.search.best = j.at("value").get<double>();
+  f.search.evaluations = j.at("evaluations").get<int>();
+  f.search.ceres_improved = j.at("ceres_improved").get<bool>();
+  for (const nlohmann::json& s : j.at("samples")) f.search.samples.push_back({s.at(0).get<double>(), s.at(1).get<double>()});
+  f.seconds = j.at("seconds").get<double>();
+  f.train = ObjectiveFromJson(j.at("train"));
+  f.validate = ObjectiveFromJson(j.at("validate"));
+  for (const nlohmann::json& d : j.at("defaults")) {
+    f.defaults.push_back(d.at("value").get<double>());
+    f.train_defaults.push_back(ObjectiveFromJson(d.at("train")));
+    f.validate_defaults.push_back(ObjectiveFromJson(d.at("validate")));
+  }
+  return f;
+}
+
+JointFit JointFit::FromJson(const nlohmann::json& j) {
+  JointFit f;
+  f.variant = j.at("variant").get<std::string>(), f.material = j.at("material").get<std::string>();
+  f.ndf = j.at("ndf").get<std::string>();
+  f.alpha = j.at("alpha").get<double>();
+  f.params = j.at("params").get<std::vector<std::string>>();
+  for (const nlohmann::json& b : j.value("bounds", nlohmann::json::array()))
+    f.bounds.push_back({b.at(0).get<double>(), b.at(1).get<double>()});
+  f.search.best = j.at("values").get<std::vector<double>>();
+  f.search.evaluations = j.value("evaluations", 0);
+  f.search.ceres_improved = j.value("ceres_improved", false);
+  for (const nlohmann::json& s : j.value("samples", nlohmann::json::array()))
+    f.search.samples.push_back({s.at(0).get<std::vector<double>>(), s.at(1).get<double>()});
+  f.seconds = j.value("seconds", 0.0);
+  f.train = ObjectiveFromJson(j.at("train"));
+  f.validate = ObjectiveFromJson(j.at("validate"));
+  const nlohmann::json& d = j.at("defaults");
+  f.defaults = d.at("values").get<std::vector<double>>();
+  f.train_defaults = ObjectiveFromJson(d.at("train"));
+  f.validate_defaults = ObjectiveFromJson(d.at("validate"));
+  for (const nlohmann::json& fj : j.value("folds", nlohmann::json::array())) {
+    CrossFold fold;
+    fold.scene = fj.at("scene").get<std::string>();
+    fold.leave_out = fj.at("leave_out").get<bool>();
+    fold.values = fj.at("values").get<std::vector<double>>();
+    fold.held_out = ObjectiveFromJson(fj.at("held_out"));
+    fold.held_out_defaults = ObjectiveFromJson(fj.at("held_out_defaults"));
+    f.folds.push_back(std::move(fold));
+  }
+  return f;
 }
 
 nlohmann::json JointFit::ToJson() const {
@@ -403,24 +472,33 @@ FitOutcome RunFits(const Spec& spec, const RunOptions& options, const std::funct
       }
   }
 
-  // value(alpha) per (variant, param, NDF, map), across materials.
+  outcome.laws = FitLaws(outcome.fits);
+  return outcome;
+}
+
+std::vector<FitLaw> FitLaws(const std::vector<MaterialFit>& fits) {
   std::map<std::tuple<std::string, std::string, std::string, std::string>, FitLaw> laws;
-  for (const MaterialFit& f : outcome.fits) {
+  for (const MaterialFit& f : fits) {
     FitLaw& law = laws[{f.variant, f.param, f.ndf, f.map}];
     law.variant = f.variant;
     law.param = f.param;
     law.ndf = f.ndf;
     law.map = f.map;
+    if (OnBound(f.search.best, {f.lo, f.hi}) != Bound::kInside) {
+      law.on_bound.push_back(f.material);
+      continue;
+    }
     law.materials.push_back(f.material);
     law.alpha.push_back(f.alpha);
     law.value.push_back(f.search.best);
   }
+  std::vector<FitLaw> out;
   for (auto& [key, law] : laws) {
     if (std::set<double>(law.alpha.begin(), law.alpha.end()).size() < 2) continue;  // a curve needs two alphas
     law.law = FitPowerLaw(law.alpha, law.value);
-    outcome.laws.push_back(std::move(law));
+    out.push_back(std::move(law));
   }
-  return outcome;
+  return out;
 }
 
 }  // namespace shimmer::experiments

@@ -216,9 +216,44 @@ PowerLaw FitPowerLaw(const std::vector<double>& alpha, const std::vector<double>
   ceres::Solve(options, &problem, &summary);
   law.a = std::exp(log_a);
   law.b = b;
-  for (std::size_t i = 0; i < alpha.size(); ++i)
+  double squares = 0;
+  for (std::size_t i = 0; i < alpha.size(); ++i) {
     law.residuals.push_back(log_a + b * std::log(alpha[i]) - std::log(value[i]));
+    squares += law.residuals.back() * law.residuals.back();
+  }
+  const int df = int(alpha.size()) - 2;
+  if (df < 1) return law;
+  ceres::Covariance covariance({});
+  const std::vector<std::pair<const double*, const double*>> blocks = {{&log_a, &log_a}, {&b, &b}};
+  if (!covariance.Compute(blocks, &problem)) return law;  // rank-deficient: one alpha only
+  double var_log_a = 0, var_b = 0;
+  covariance.GetCovarianceBlock(&log_a, &log_a, &var_log_a);
+  covariance.GetCovarianceBlock(&b, &b, &var_b);
+  const double scale = squares / df, t = StudentT975(df);
+  const double half_log_a = t * std::sqrt(var_log_a * scale), half_b = t * std::sqrt(var_b * scale);
+  law.a_lo = std::exp(log_a - half_log_a), law.a_hi = std::exp(log_a + half_log_a);
+  law.b_lo = b - half_b, law.b_hi = b + half_b;
   return law;
+}
+
+Bound OnBound(double value, const FitAxis& axis) {
+  const bool log = axis.Logarithmic() && value > 0;
+  auto at = [&](double x) { return log ? std::log(x) : x; };
+  const double span = at(axis.hi) - at(axis.lo), tolerance = 1e-3 * std::abs(span);
+  if (std::abs(at(value) - at(axis.lo)) <= tolerance) return Bound::kLower;
+  if (std::abs(at(value) - at(axis.hi)) <= tolerance) return Bound::kUpper;
+  return Bound::kInside;
+}
+
+// By degrees of freedom (1..30), then the Cornish-Fisher expansion about the
+// normal quantile, within 1e-3 beyond.
+double StudentT975(int df) {
+  static const double table[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
+                                 2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086,
+                                 2.080,  2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042};
+  if (df >= 1 && df <= 30) return table[df - 1];
+  const double z = 1.959964;
+  return z + (z * z * z + z) / (4.0 * df) + (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96.0 * df * df);
 }
 
 }  // namespace shimmer::experiments

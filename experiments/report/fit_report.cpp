@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -50,16 +51,29 @@ std::pair<std::string, std::vector<Knob>> EngineKnobs(const std::string& variant
   return {variant, {}};
 }
 
+// " (on its lower bound 0.25)" when `value` sits on a bound of `axis`: the
+// search stopped there, and the true optimum may lie beyond it. `show`
+// turns the bound into the unit the value is printed in.
+std::string BoundNote(double value, const FitAxis& axis, const std::function<double(double)>& show = {}) {
+  const Bound bound = OnBound(value, axis);
+  if (bound == Bound::kInside) return "";
+  const double at = bound == Bound::kLower ? axis.lo : axis.hi;
+  return std::string(" (on its ") + (bound == Bound::kLower ? "lower" : "upper") + " bound " +
+         FormatNumber(show ? show(at) : at) + ")";
+}
+
 std::string KnobText(const std::string& variant, const std::vector<std::string>& params,
-                     const std::vector<double>& values) {
+                     const std::vector<double>& values, const std::vector<FitAxis>& bounds = {}) {
   const auto knobs = EngineKnobs(variant).second;
   std::string text;
   for (std::size_t i = 0; i < params.size(); ++i) {
     std::string name = params[i];
-    double v = values[i];
+    bool root = false;
     for (const Knob& k : knobs)
-      if (k.param == params[i]) name = k.name, v = k.root ? std::sqrt(std::max(v, 0.0)) : v;
-    text += (i ? ", " : "") + name + " = " + FormatNumber(v);
+      if (k.param == params[i]) name = k.name, root = k.root;
+    const auto show = [root](double x) { return root ? std::sqrt(std::max(x, 0.0)) : x; };
+    text += (i ? ", " : "") + name + " = " + FormatNumber(show(values[i]));
+    if (i < bounds.size()) text += BoundNote(values[i], bounds[i], show);
   }
   return text;
 }
@@ -116,9 +130,9 @@ std::string EngineSettingsMarkdown(const std::vector<JointFit>& fits) {
       const CrossFold& out = f.folds[i];
       const CrossFold& alone = f.folds[i + 1];
       md << "| `" << f.variant << "` | " << f.material << " | " << out.scene << " | "
-         << KnobText(f.variant, f.params, out.values) << " | " << WithInterval(out.held_out) << " ("
+         << KnobText(f.variant, f.params, out.values, f.bounds) << " | " << WithInterval(out.held_out) << " ("
          << WithInterval(out.held_out_defaults) << ") | " << Verdict(out.held_out, out.held_out_defaults) << " | "
-         << KnobText(f.variant, f.params, alone.values) << " | " << WithInterval(alone.held_out) << " ("
+         << KnobText(f.variant, f.params, alone.values, f.bounds) << " | " << WithInterval(alone.held_out) << " ("
          << WithInterval(alone.held_out_defaults) << ") | " << Verdict(alone.held_out, alone.held_out_defaults)
          << " |\n";
     }
@@ -135,7 +149,8 @@ std::vector<EngineSettingRow> EngineSettingRows(const std::vector<JointFit>& fit
   for (const auto& [material, list] : by_material)
     for (const JointFit* f : list)
       rows.push_back({material, EngineKnobs(f->variant).first + " (`" + f->variant + "`)",
-                      KnobText(f->variant, f->params, f->search.best), KnobText(f->variant, f->params, f->defaults),
+                      KnobText(f->variant, f->params, f->search.best, f->bounds),
+                      KnobText(f->variant, f->params, f->defaults),
                       WithInterval(f->train) + " (" + WithInterval(f->train_defaults) + ")",
                       WithInterval(f->validate) + " (" + WithInterval(f->validate_defaults) + ")",
                       Verdict(f->validate, f->validate_defaults)});
@@ -153,56 +168,39 @@ TransferCount CountTransfer(const std::vector<JointFit>& fits, bool leave_out) {
   return c;
 }
 
-Result<std::vector<JointFit>> ReadJointFits(const std::string& path) {
+Result<FitOutcome> ReadFitOutcome(const std::string& path) {
   auto doc = ReadJsonFile(path);
   if (!doc) return doc.failure();
-  auto fail = [&](const std::string& why) {
-    return Result<std::vector<JointFit>>(Error{ErrorCode::kBadInput, path + ": " + why});
-  };
+  auto fail = [&](const std::string& why) { return Result<FitOutcome>(Error{ErrorCode::kBadInput, path + ": " + why}); };
   try {
-    if (!doc->is_object() || !doc->contains("joint_fits"))
-      return fail("not a fit.json with joint fits (no \"joint_fits\"; run shimmer fit on a spec with joint fits)");
-    auto objective = [](const nlohmann::json& j) {
-      ObjectiveValue v;
-      v.j = j.at("j").get<double>();
-      v.half_width = j.at("j_ci95_half_width").get<double>();
-      return v;
-    };
-    std::vector<JointFit> fits;
-    for (const nlohmann::json& j : doc->at("joint_fits")) {
-      JointFit f;
-      f.variant = j.at("variant").get<std::string>();
-      f.material = j.at("material").get<std::string>();
-      f.ndf = j.at("ndf").get<std::string>();
-      f.alpha = j.at("alpha").get<double>();
-      f.params = j.at("params").get<std::vector<std::string>>();
-      f.search.best = j.at("values").get<std::vector<double>>();
-      f.train = objective(j.at("train"));
-      f.validate = objective(j.at("validate"));
-      const nlohmann::json& d = j.at("defaults");
-      f.defaults = d.at("values").get<std::vector<double>>();
-      f.train_defaults = objective(d.at("train"));
-      f.validate_defaults = objective(d.at("validate"));
+    if (!doc->is_object() || (!doc->contains("fits") && !doc->contains("joint_fits")))
+      return fail("not a fit.json (neither \"fits\" nor \"joint_fits\"; shimmer fit writes one)");
+    FitOutcome outcome;
+    for (const nlohmann::json& j : doc->value("fits", nlohmann::json::array()))
+      outcome.fits.push_back(MaterialFit::FromJson(j));
+    for (const nlohmann::json& j : doc->value("joint_fits", nlohmann::json::array())) {
+      JointFit f = JointFit::FromJson(j);
       if (f.search.best.size() != f.params.size() || f.defaults.size() != f.params.size())
         return fail("joint fit of " + f.variant + " on " + f.material + " has " +
                     std::to_string(f.search.best.size()) + " values for " + std::to_string(f.params.size()) +
                     " parameters");
-      for (const nlohmann::json& fj : j.value("folds", nlohmann::json::array())) {
-        CrossFold fold;
-        fold.scene = fj.at("scene").get<std::string>();
-        fold.leave_out = fj.at("leave_out").get<bool>();
-        fold.values = fj.at("values").get<std::vector<double>>();
-        fold.held_out = objective(fj.at("held_out"));
-        fold.held_out_defaults = objective(fj.at("held_out_defaults"));
-        f.folds.push_back(std::move(fold));
-      }
-      fits.push_back(std::move(f));
+      outcome.joint_fits.push_back(std::move(f));
     }
-    if (fits.empty()) return fail("has no joint fits");
-    return fits;
+    outcome.laws = FitLaws(outcome.fits);
+    return outcome;
   } catch (const nlohmann::json::exception& e) {
     return fail(std::string("not a fit.json as shimmer fit writes it: ") + e.what());
   }
+}
+
+Result<std::vector<JointFit>> ReadJointFits(const std::string& path) {
+  auto outcome = ReadFitOutcome(path);
+  if (!outcome) return outcome.failure();
+  if (outcome->joint_fits.empty())
+    return Result<std::vector<JointFit>>(
+        Error{ErrorCode::kBadInput, path + ": has no joint fits (no \"joint_fits\" in it, or none; run shimmer fit "
+                                           "on a spec with joint fits)"});
+  return std::move(outcome->joint_fits);
 }
 
 Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::string& out_dir,
@@ -221,7 +219,10 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
   for (const FitLaw& l : outcome.laws) {
     nlohmann::json law = {{"variant", l.variant},   {"param", l.param}, {"ndf", l.ndf},
                           {"a", l.law.a},           {"b", l.law.b},     {"materials", l.materials},
-                          {"alpha", l.alpha},       {"value", l.value}, {"log_residuals", l.law.residuals}};
+                          {"alpha", l.alpha},       {"value", l.value}, {"log_residuals", l.law.residuals},
+                          {"on_bound", l.on_bound}};
+    if (l.law.HasInterval())
+      law["ci95"] = {{"a", {l.law.a_lo, l.law.a_hi}}, {"b", {l.law.b_lo, l.law.b_hi}}};
     if (!l.map.empty()) law["map"] = l.map;
     all["laws"].push_back(law);
   }
@@ -275,6 +276,8 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
     const bool per_map = std::any_of(fits.begin(), fits.end(), [](const MaterialFit* f) { return !f->map.empty(); });
     const std::string slug = "fit_" + Slug(first.variant + "_" + first.param);
     md << "## " << first.variant << ": " << first.param << "\n\n![J(p)](" << slug << ".svg)\n\n"
+       << "J with ± half the width of its 95 % interval (first order from the metrics' intervals); a fitted value "
+          "on a bound of the search says so.\n\n"
        << "| material |" << (per_map ? " map |" : "") << " α | fitted " << first.param << " | J train | J validate |";
     for (double d : first.defaults) md << " J train at " << d << " | J validate at " << d << " |";
     md << " evaluations | render s |\n|---|---|---|---|---|" << (per_map ? "---|" : "");
@@ -287,10 +290,11 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
          << "plot ";
     int block = 0;
     for (const MaterialFit* f : fits) {
-      md << "| " << f->material << " | " << (per_map ? f->map + " | " : "") << FormatNumber(f->alpha) << " | **" << FormatNumber(f->search.best) << "** | "
-         << FormatNumber(f->train.j) << " | " << FormatNumber(f->validate.j) << " |";
+      md << "| " << f->material << " | " << (per_map ? f->map + " | " : "") << FormatNumber(f->alpha) << " | **"
+         << FormatNumber(f->search.best) << "**" << BoundNote(f->search.best, {f->lo, f->hi}) << " | "
+         << WithInterval(f->train) << " | " << WithInterval(f->validate) << " |";
       for (std::size_t i = 0; i < f->defaults.size(); ++i)
-        md << " " << FormatNumber(f->train_defaults[i].j) << " | " << FormatNumber(f->validate_defaults[i].j) << " |";
+        md << " " << WithInterval(f->train_defaults[i]) << " | " << WithInterval(f->validate_defaults[i]) << " |";
       md << " " << f->search.evaluations << " | " << FormatNumber(f->seconds, "%.0f") << " |\n";
       auto samples = f->search.samples;
       std::sort(samples.begin(), samples.end());
@@ -306,16 +310,49 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
     plot << "\n";
     md << "\n";
     // Honest verdicts: does the fitted value hold up on shots it never saw?
+    // By the report's rule: one J beats another only with the intervals apart.
+    int tied = 0, compared = 0;
     for (const MaterialFit* f : fits)
-      for (std::size_t i = 0; i < f->defaults.size(); ++i)
-        if (f->validate.j > f->validate_defaults[i].j)
-          md << "- On held-out shots, " << Subject(*f) << "'s fitted value (J " << FormatNumber(f->validate.j)
-             << ") loses to the default " << f->defaults[i] << " (J " << FormatNumber(f->validate_defaults[i].j)
-             << ").\n";
+      for (std::size_t i = 0; i < f->defaults.size(); ++i) {
+        ++compared;
+        const std::string verdict = Verdict(f->validate, f->validate_defaults[i]);
+        if (verdict == "shipped better")
+          md << "- On held-out shots, " << Subject(*f) << "'s fitted value (J " << WithInterval(f->validate)
+             << ") loses to the default " << f->defaults[i] << " (J " << WithInterval(f->validate_defaults[i])
+             << "): the intervals are apart.\n";
+        else if (verdict == "fitted better")
+          md << "- On held-out shots, " << Subject(*f) << "'s fitted value (J " << WithInterval(f->validate)
+             << ") beats the default " << f->defaults[i] << " (J " << WithInterval(f->validate_defaults[i])
+             << "): the intervals are apart.\n";
+        else
+          ++tied;
+      }
+    if (compared)
+      md << "- " << tied << " of " << compared
+         << " held-out comparisons with a default are tied: the two J intervals overlap, and neither value is "
+            "better there.\n";
+    int on_bound = 0;
+    for (const MaterialFit* f : fits) on_bound += OnBound(f->search.best, {f->lo, f->hi}) != Bound::kInside;
+    if (on_bound)
+      md << "- " << on_bound << " of " << fits.size()
+         << " fitted values sit on a bound of the search (marked in the table): J still fell toward it, and the "
+            "optimum may lie beyond; widen the bounds to find it.\n";
     for (const FitLaw& l : outcome.laws) {
       if (l.variant != first.variant || l.param != first.param) continue;
-      md << "\nClosed form for " << l.ndf << " materials" << (l.map.empty() ? "" : " with " + l.map) << " (Ceres, Cauchy loss 0.2 on log " << l.param << "): **"
-         << l.param << "(α) = " << FormatNumber(l.law.a) << " · α^" << FormatNumber(l.law.b) << "**\n\n"
+      const std::string subject = l.ndf + " materials" + (l.map.empty() ? "" : " with " + l.map);
+      const std::string left_out =
+          l.on_bound.empty() ? "" : " Left out, their fitted value on a bound: " + Join(l.on_bound) + ".";
+      if (!l.law.HasInterval()) {
+        md << "\nNo closed form for " << subject << ": " << l.alpha.size()
+           << " materials with a fitted value inside the bounds fit any two-coefficient law exactly, with no "
+              "residual to judge it by (a law is printed from three)." << left_out << "\n";
+        continue;
+      }
+      md << "\nClosed form for " << subject << " (Ceres, Cauchy loss 0.2 on log " << l.param << "): **" << l.param
+         << "(α) = " << FormatNumber(l.law.a) << " · α^" << FormatNumber(l.law.b) << "**, a in ["
+         << FormatNumber(l.law.a_lo) << ", " << FormatNumber(l.law.a_hi) << "], b in [" << FormatNumber(l.law.b_lo)
+         << ", " << FormatNumber(l.law.b_hi) << "] (95 %, Student's t on " << l.alpha.size() - 2
+         << " degrees of freedom)." << left_out << "\n\n"
          << "| material | α | fitted | closed form | log residual |\n|---|---|---|---|---|\n";
       for (std::size_t i = 0; i < l.alpha.size(); ++i)
         md << "| " << l.materials[i] << " | " << FormatNumber(l.alpha[i]) << " | " << FormatNumber(l.value[i]) << " | "

@@ -17,6 +17,7 @@
 #include <set>
 
 #include "runner_parts.h"
+#include "shimmer/experiments/minimize.h"
 #include "shimmer/experiments/runner.h"
 
 namespace shimmer::experiments {
@@ -29,16 +30,6 @@ double Median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-// Student's t, two-sided 95 %, by degrees of freedom (1..30), then the
-// Cornish-Fisher expansion about the normal quantile, within 1e-3 beyond.
-double T975(int df) {
-  static const double table[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
-                                 2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086,
-                                 2.080,  2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042};
-  if (df >= 1 && df <= 30) return table[df - 1];
-  const double z = 1.959964;
-  return z + (z * z * z + z) / (4.0 * df) + (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96.0 * df * df);
-}
 
 }  // namespace
 
@@ -56,7 +47,7 @@ RatioEstimate PairedRatio(const std::vector<double>& test_ms, const std::vector<
   if (r.n < 2) return r;
   double ss = 0;
   for (double x : d) ss += (x - mean) * (x - mean);
-  const double half = T975(r.n - 1) * std::sqrt(ss / (r.n - 1) / r.n);
+  const double half = StudentT975(r.n - 1) * std::sqrt(ss / (r.n - 1) / r.n);
   r.lo = std::exp(mean - half);
   r.hi = std::exp(mean + half);
   return r;

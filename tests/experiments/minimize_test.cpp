@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <tuple>
 
 #include "shimmer/experiments/minimize.h"
 #include "shimmer/experiments/fit_report.h"
@@ -142,6 +143,101 @@ TEST(Fit, PowerLawRecoversKnownCurveDespiteAnOutlier) {
   EXPECT_NEAR(law.b, 0.6, 0.05);
   EXPECT_EQ(law.residuals.size(), alpha.size());
   EXPECT_GT(std::abs(law.residuals[3]), 1.0);  // the outlier stays an outlier
+}
+
+// Noise of known size on log values: the 95 % intervals of a and b hold the
+// true coefficients; two points give a law but no interval.
+TEST(Fit, PowerLawCoefficientsCarryIntervalsThatHoldTheTruth) {
+  std::vector<double> alpha{0.01, 0.02, 0.05, 0.1, 0.2, 0.5}, value;
+  const double wiggle[] = {0.05, -0.04, 0.03, -0.05, 0.04, -0.03};  // log units
+  for (std::size_t i = 0; i < alpha.size(); ++i) value.push_back(0.8 * std::pow(alpha[i], 0.6) * std::exp(wiggle[i]));
+  const PowerLaw law = FitPowerLaw(alpha, value);
+  ASSERT_TRUE(law.HasInterval());
+  EXPECT_LT(law.a_lo, 0.8);
+  EXPECT_GT(law.a_hi, 0.8);
+  EXPECT_LT(law.b_lo, 0.6);
+  EXPECT_GT(law.b_hi, 0.6);
+  EXPECT_LT(law.b_hi - law.b_lo, 0.1);  // tight: the noise is 5 % over 1.7 decades of alpha
+  EXPECT_LT(law.a_lo, law.a);
+  EXPECT_GT(law.a_hi, law.a);
+  const PowerLaw two = FitPowerLaw({0.01, 0.1}, {0.02, 0.06});
+  EXPECT_FALSE(two.HasInterval());
+  EXPECT_NEAR(two.b, std::log(3.0) / std::log(10.0), 1e-6);
+}
+
+TEST(Fit, ValuesOnABoundAreMarkedAndLeftOutOfTheLaw) {
+  EXPECT_EQ(OnBound(0.01, {0.01, 4}), Bound::kLower);
+  EXPECT_EQ(OnBound(4, {0.01, 4}), Bound::kUpper);
+  EXPECT_EQ(OnBound(3.99, {0.01, 4}), Bound::kUpper);  // within 0.1 % of the log span
+  EXPECT_EQ(OnBound(3.9, {0.01, 4}), Bound::kInside);
+  EXPECT_EQ(OnBound(-0.5, {-0.5, 0.5}), Bound::kLower);  // linear axes: of the span itself
+  EXPECT_EQ(OnBound(0, {-0.5, 0.5}), Bound::kInside);
+  std::vector<MaterialFit> fits;
+  for (auto [material, alpha, value] : {std::tuple<const char*, double, double>{"ggx:0.01", 0.01, 0.02},
+                                        {"ggx:0.05", 0.05, 0.05},
+                                        {"ggx:0.2", 0.2, 0.11},
+                                        {"ggx:0.5", 0.5, 4.0}}) {
+    MaterialFit f;
+    f.variant = "k16-beckmann-rect", f.param = "fp_max", f.ndf = "ggx", f.material = material;
+    f.alpha = alpha, f.lo = 0.01, f.hi = 4, f.search.best = value;
+    fits.push_back(f);
+  }
+  const std::vector<FitLaw> laws = FitLaws(fits);
+  ASSERT_EQ(laws.size(), 1u);
+  EXPECT_EQ(laws[0].materials, (std::vector<std::string>{"ggx:0.01", "ggx:0.05", "ggx:0.2"}));
+  EXPECT_EQ(laws[0].on_bound, (std::vector<std::string>{"ggx:0.5"}));
+}
+
+// fit.md from fits with known numbers: bound notes, verdicts only where
+// the J intervals are apart, the law with its coefficients' intervals; and
+// the same report again from the fit.json it wrote.
+TEST(FitJson, ReportMarksBoundsDecidesByIntervalsAndRewritesFromItsJson) {
+  std::vector<MaterialFit> fits;
+  auto add = [&](const char* material, double alpha, double value, double j_validate, double j_default) {
+    MaterialFit f;
+    f.variant = "k16-beckmann-rect", f.param = "fp_max", f.ndf = "ggx", f.material = material;
+    f.alpha = alpha, f.lo = 0.01, f.hi = 4, f.search.best = value;
+    f.search.samples = {{0.01, 2}, {value, 1}, {4, 3}};
+    f.search.evaluations = 3;
+    f.train = {1, 0.1, {}};
+    f.validate = {j_validate, 0.1, {}};
+    f.defaults = {1.0};
+    f.train_defaults = {{1.2, 0.1, {}}};
+    f.validate_defaults = {{j_default, 0.1, {}}};
+    fits.push_back(f);
+  };
+  add("ggx:0.01", 0.01, 0.02, 1.0, 2.0);    // apart: beats the default
+  add("ggx:0.05", 0.05, 0.05, 1.0, 1.05);   // overlapping: tied, although lower
+  add("ggx:0.1", 0.1, 0.07, 3.0, 1.0);      // apart: loses
+  add("ggx:0.2", 0.2, 0.11, 1.0, 1.0);      // tied
+  add("ggx:0.5", 0.5, 4.0, 1.0, 1.0);       // on the upper bound
+  FitOutcome outcome;
+  outcome.fits = fits;
+  outcome.laws = FitLaws(fits);
+  Spec spec;
+  spec.name = "t";
+  shimmer::testing::TempDir dir;
+  ASSERT_TRUE(WriteFitReport(outcome, spec, (dir.path() / "a").string(), nullptr));
+  std::ifstream in(dir.path() / "a" / "fit.md");
+  const std::string md((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_NE(md.find("**4** (on its upper bound 4)"), std::string::npos) << md;
+  EXPECT_NE(md.find("ggx:0.01's fitted value (J 1 ± 0.1) beats the default 1"), std::string::npos) << md;
+  EXPECT_NE(md.find("ggx:0.1's fitted value (J 3 ± 0.1) loses to the default 1"), std::string::npos) << md;
+  EXPECT_EQ(md.find("ggx:0.05's fitted value"), std::string::npos) << md;
+  EXPECT_NE(md.find("3 of 5 held-out comparisons with a default are tied"), std::string::npos) << md;
+  EXPECT_NE(md.find("1 of 5 fitted values sit on a bound"), std::string::npos) << md;
+  EXPECT_NE(md.find("Left out, their fitted value on a bound: ggx:0.5."), std::string::npos) << md;
+  EXPECT_NE(md.find(", a in ["), std::string::npos) << md;
+  EXPECT_NE(md.find("degrees of freedom"), std::string::npos) << md;
+  // Again from its fit.json: the same fit.md.
+  const auto read = ReadFitOutcome((dir.path() / "a" / "fit.json").string());
+  ASSERT_TRUE(read) << read.error();
+  ASSERT_EQ(read->fits.size(), 5u);
+  EXPECT_EQ(read->fits[0].search.samples, fits[0].search.samples);
+  EXPECT_EQ(read->laws.size(), 1u);
+  ASSERT_TRUE(WriteFitReport(*read, spec, (dir.path() / "b").string(), nullptr));
+  std::ifstream again(dir.path() / "b" / "fit.md");
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(again)), {}), md);
 }
 
 // fit.json's joint fits read back as WriteFitReport wrote them (JointFit::ToJson).

@@ -391,6 +391,37 @@ TEST(ReportTables, VerdictColumnFollowsTheDecisionRule) {
   EXPECT_NE(md.find("| `none` | 0.1 | 1 [0.923, 1.08] | 1 | +0.000 | n/a | n/a | baseline |"), std::string::npos) << md;
 }
 
+// The reference-noise section counts each row once by the decision rule:
+// unresolved ties (noise over half of the comparison and visible), ties
+// under noise too faint to see, and the shots that hold the unresolved.
+TEST(ReportTables, ReferenceNoiseSectionCountsRowsByTheRule) {
+  std::vector<JobResult> rows;
+  auto add = [&](const char* scene, const char* variant, double tv_err, double noise) {
+    JobResult r = Row(scene, "ggx:0.01", variant, tv_err, 0.0, 0.04);
+    r.metrics["tv_err_floor"] = 0.9;
+    r.metrics["ref_noise"] = noise, r.metrics["ref_mean"] = 0.5;
+    rows.push_back(r);
+  };
+  // Contrast sqrt(1e-2) / 0.5 = 20 %: visible. `a` ties: unresolved; `b` is apart: better.
+  add("sphere", "none", 1.0, 1e-2);
+  add("sphere", "a", 0.95, 1e-2);
+  add("sphere", "b", 0.2, 1e-2);
+  // Contrast sqrt(1e-6) / 0.5 = 0.2 %: `c`'s tie stands.
+  add("wires", "none", 1.0, 1e-6);
+  add("wires", "c", 0.95, 1e-6);
+  const std::vector<Group> groups = GroupRows(rows);
+  Document doc;
+  ReferenceNoiseSection(doc, Pointers(groups));
+  const std::string md = ToMarkdown(doc);
+  EXPECT_NE(md.find("5 of 5 rows have `tv_err_floor` above 0.5"), std::string::npos) << md;
+  EXPECT_NE(md.find("0 of the 3 comparisons with `none` are paired"), std::string::npos) << md;
+  EXPECT_NE(md.find("(1 rows: fainter than any visible flicker"), std::string::npos) << md;
+  EXPECT_NE(md.find("1 rows (20.0 %) are unresolved"), std::string::npos) << md;
+  EXPECT_NE(md.find("not met in this store"), std::string::npos) << md;
+  EXPECT_NE(md.find("sphere / ggx:0.01 / orbit: 1 rows"), std::string::npos) << md;
+  EXPECT_EQ(md.find("wires / ggx:0.01 / orbit:"), std::string::npos) << md;
+}
+
 TEST(ReportOverview, UnconvergedShotIsLeftOutAndListed) {
   std::vector<JobResult> rows;
   for (const char* material : {"ggx:0.01", "ggx:0.5", "ggx:0.2"}) {

@@ -15,10 +15,13 @@ namespace shimmer::experiments {
 Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::string& out_dir,
                       std::vector<std::string>* warnings);
 
-// The joint fits of a fit.json that WriteFitReport wrote, with what the
-// engine-settings tables show (settings, J and its half-width, folds; not
-// the per-shot terms or the search's samples). One error naming the file
-// when it cannot be read, is not a fit.json, or has no joint fits.
+// The fits of a fit.json that WriteFitReport wrote, as RunFits returned
+// them (the closed forms recomputed from the fits by FitLaws), so that a
+// report can be written again without rendering (`shimmer fit --from-json`).
+// One error naming the file when it cannot be read or is not a fit.json.
+Result<FitOutcome> ReadFitOutcome(const std::string& path);
+
+// Its joint fits; an error too when it has none.
 Result<std::vector<JointFit>> ReadJointFits(const std::string& path);
 
 // One row of the engine-settings table (fit.md, and the report's overview):

@@ -61,6 +61,7 @@ struct MaterialFit {
   std::vector<double> defaults;
   std::vector<ObjectiveValue> train_defaults, validate_defaults;
   nlohmann::json ToJson() const;
+  static MaterialFit FromJson(const nlohmann::json& j);  // throws nlohmann::json::exception
 };
 
 struct FitLaw {
@@ -68,7 +69,14 @@ struct FitLaw {
   std::vector<std::string> materials;
   std::vector<double> alpha, value;
   PowerLaw law;
+  // Materials left out of the law: their fitted value sits on a bound, where
+  // the search stopped rather than found a minimum.
+  std::vector<std::string> on_bound;
 };
+
+// value(alpha) per (variant, param, NDF, map) across the fits' materials,
+// those on a bound left out; none where fewer than two alphas remain.
+std::vector<FitLaw> FitLaws(const std::vector<MaterialFit>& fits);
 
 // One fold of a joint fit's cross-validation: the setting fitted on the
 // training shots without `scene` (leave_out) or on `scene` alone, measured on
@@ -94,6 +102,7 @@ struct JointFit {
   ObjectiveValue train_defaults, validate_defaults;
   std::vector<CrossFold> folds;
   nlohmann::json ToJson() const;
+  static JointFit FromJson(const nlohmann::json& j);  // throws nlohmann::json::exception
 };
 
 struct FitOutcome {

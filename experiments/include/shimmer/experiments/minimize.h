@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,12 @@ struct FitAxis {
   bool Logarithmic() const { return lo > 0; }
 };
 
+// Where a fitted value sits on its axis: a value within 0.1 % of the axis'
+// span (in log p on logarithmic axes) of an end is on that bound, and the
+// search stopped there rather than at a minimum of J.
+enum class Bound { kInside, kLower, kUpper };
+Bound OnBound(double value, const FitAxis& axis);
+
 struct FitND {
   std::vector<double> best;     // a value per axis
   double objective = 0;         // J(best)
@@ -59,7 +66,17 @@ FitND MinimizeND(const std::function<double(const std::vector<double>&)>& object
 struct PowerLaw {
   double a = 0, b = 0;
   std::vector<double> residuals;  // log(fitted) - log(value), per point
+  // 95 % intervals of a and b: Student's t on n - 2 degrees of freedom
+  // about Ceres' covariance of (log a, b), scaled by the residuals' variance
+  // sum r^2 / (n - 2). NaN with fewer than three points (two points fit any
+  // law exactly: no residual, no interval).
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  double a_lo = kNaN, a_hi = kNaN, b_lo = kNaN, b_hi = kNaN;
+  bool HasInterval() const { return a_lo == a_lo && b_lo == b_lo; }
 };
 PowerLaw FitPowerLaw(const std::vector<double>& alpha, const std::vector<double>& value);
+
+// Student's t, the two-sided 95 % quantile for `df` degrees of freedom.
+double StudentT975(int df);
 
 }  // namespace shimmer::experiments

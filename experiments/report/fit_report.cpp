@@ -317,11 +317,11 @@ Status WriteFitReport(const FitOutcome& outcome, const Spec& spec, const std::st
         ++compared;
         const std::string verdict = Verdict(f->validate, f->validate_defaults[i]);
         if (verdict == "shipped better")
-          md << "- On held-out shots, " << Subject(*f) << "'s fitted value (J " << WithInterval(f->validate)
+          md << "- On held-out shots, the fitted value for " << Subject(*f) << " (J " << WithInterval(f->validate)
              << ") loses to the default " << f->defaults[i] << " (J " << WithInterval(f->validate_defaults[i])
              << "): the intervals are apart.\n";
         else if (verdict == "fitted better")
-          md << "- On held-out shots, " << Subject(*f) << "'s fitted value (J " << WithInterval(f->validate)
+          md << "- On held-out shots, the fitted value for " << Subject(*f) << " (J " << WithInterval(f->validate)
              << ") beats the default " << f->defaults[i] << " (J " << WithInterval(f->validate_defaults[i])
              << "): the intervals are apart.\n";
         else

@@ -12,8 +12,11 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 namespace {
 
@@ -190,6 +193,62 @@ TEST(CommittedResults, EveryPickIsBetterInHalfItsCellAndStandsInTheGrid) {
           << where << "\n" << grid;
     }
   }
+}
+
+}  // namespace
+
+namespace {
+
+// Every committed fit.md against its fit.json: a held-out "beats" or
+// "loses" only where the J intervals are apart (the decision rule's
+// Separate), each such pair said, and a value on a bound of its search marked.
+TEST(CommittedResults, EveryFitVerdictFollowsTheIntervalsAndBoundsAreMarked) {
+  int fits = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(SHIMMER_SOURCE_DIR) / "results")) {
+    const fs::path json_file = entry.path() / "fit.json", md_file = entry.path() / "fit.md";
+    if (!fs::exists(json_file)) continue;
+    std::ifstream json_in(json_file), md_in(md_file);
+    const nlohmann::json doc = nlohmann::json::parse(json_in);
+    const std::string md((std::istreambuf_iterator<char>(md_in)), {});
+    for (const nlohmann::json& f : doc.value("fits", nlohmann::json::array())) {
+      ++fits;
+      const std::string subject =
+          f.at("material").get<std::string>() + (f.contains("map") ? " with " + f.at("map").get<std::string>() : "");
+      // The fit's own section: from "## variant: param" to the next heading of that level.
+      const std::string heading = "\n## " + f.at("variant").get<std::string>() + ": " + f.at("param").get<std::string>() + "\n";
+      const std::size_t start = md.find(heading);
+      ASSERT_NE(start, std::string::npos) << md_file << ": no section " << heading;
+      const std::string section = md.substr(start, md.find("\n## ", start + 1) - start);
+      const double j = f.at("validate").at("j"), hw = f.at("validate").at("j_ci95_half_width");
+      for (const nlohmann::json& d : f.at("defaults")) {
+        const double dj = d.at("validate").at("j"), dhw = d.at("validate").at("j_ci95_half_width");
+        const std::string line = "the fitted value for " + subject + " (J ";
+        const bool loses = j - hw > dj + dhw, beats = j + hw < dj - dhw;
+        const std::string value = nlohmann::json(d.at("value").get<double>()).dump();
+        // The line names the default as shimmer prints a double (C++ stream): 1, 0.7.
+        std::ostringstream name;
+        name << d.at("value").get<double>();
+        const auto said = [&](const char* verb) {
+          std::size_t at = 0;
+          while ((at = section.find(line, at)) != std::string::npos) {
+            const std::string rest = section.substr(at, section.find('\n', at) - at);
+            if (rest.find(std::string(verb) + " the default " + name.str() + " (J") != std::string::npos) return true;
+            ++at;
+          }
+          return false;
+        };
+        EXPECT_EQ(said("loses to"), loses) << md_file << ": " << subject << " against " << value;
+        EXPECT_EQ(said("beats"), beats) << md_file << ": " << subject << " against " << value;
+      }
+      const double v = f.at("value"), lo = f.at("bounds").at(0), hi = f.at("bounds").at(1);
+      const double span = std::log(hi) - std::log(lo);
+      const bool on_bound = std::abs(std::log(v / lo)) <= 1e-3 * span || std::abs(std::log(v / hi)) <= 1e-3 * span;
+      if (on_bound) {
+        EXPECT_NE(section.find("(on its "), std::string::npos) << md_file << ": " << subject << " sits on a bound";
+      }
+    }
+  }
+  EXPECT_GT(fits, 0) << "no committed fit.json with fits";
 }
 
 }  // namespace

@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
 # The README's five-minute tour, run for real: renders a shot and its
 # reference, measures them, and writes each command with its output to
-# results/tour/*.txt; then puts those files, and the standard report's answer
-# grid, into the README's generated blocks (tests/experiments/readme_test.cpp
-# checks that they match). Run after `bash scripts/build.sh`.
+# results/tour/*.txt; then puts those files, and the reports' tables they
+# name, into the generated blocks of the README and docs/*.md
+# (tests/experiments/readme_test.cpp checks that they match). Run after
+# `bash scripts/build.sh`. With --blocks-only it renders nothing and only
+# fills the blocks again from the files as they are (after a report moved).
 set -euo pipefail
+blocks_only=false
+[ "${1:-}" = --blocks-only ] && blocks_only=true
 root=$(cd "$(dirname "$0")/.." && pwd)
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 bin="${SHIMMER_BUILD_DIR:-$root/build}/experiments"
@@ -20,6 +24,7 @@ step() {
   { echo "\$ $*"; PATH="$bin:$PATH" "$@" 2>&1; } >"$out/$file.tmp"
   mv "$out/$file.tmp" "$out/$file"
 }
+if ! $blocks_only; then
 step render.txt shimmer render --scene sphere-field --camera orbit --variant none --frames 16 --size 96 96 --out demo
 step render-reference.txt shimmer render --scene sphere-field --camera orbit --variant none --frames 16 --size 96 96 \
   --reference-spp 4 --out demo-ref
@@ -27,21 +32,37 @@ step render-filter.txt shimmer render --scene sphere-field --camera orbit --vari
   --out demo-tk21
 step metrics.txt shimmer metrics demo demo-ref --highlight-mask --highlight-threshold 0.1
 step metrics-filter.txt shimmer metrics demo-tk21 demo-ref --highlight-mask --highlight-threshold 0.1
+step sweep.txt shimmer sweep --scene sphere --material ggx:0.01 --variant k16-beckmann-rect \
+  --param fp_max=0.01:1:4 --log --size 48 48 --frames 8
+fi
 cd "$root"
-python3 - "$root/README.md" <<'PY'
+# The generated blocks of the README and of docs/*.md: a console transcript
+# (a file), a report's answer grid (REPORT#answer), or the first table after
+# one of a report's headings (REPORT#table:ANCHOR, the heading's anchor).
+python3 - "$root/README.md" "$root"/docs/*.md <<'PY'
 import re, sys, pathlib
-readme = pathlib.Path(sys.argv[1])
-root = readme.parent
-def content(source):
+def anchor(heading):  # GitHub's, as report_document.cpp's Anchor
+    return "".join(c.lower() if (ord(c) >= 0x80 or c.isalnum() or c in "-_") else "-" if c == " " else ""
+                   for c in heading)
+def first_table(lines, start):
+    first = next(i for i in range(start, len(lines)) if lines[i].startswith("|"))
+    end = next((i for i in range(first, len(lines)) if not lines[i].startswith("|")), len(lines))
+    return "\n".join(lines[first:end]) + "\n"
+def content(root, source):
     path, _, part = source.partition("#")
     text = (root / path).read_text()
+    lines = text.splitlines()
     if part == "answer":  # the grid: the first table after "## Answer"
-        lines = text[text.index("\n## Answer\n"):].splitlines()
-        first = next(i for i, l in enumerate(lines) if l.startswith("|"))
-        end = next(i for i in range(first, len(lines)) if not lines[i].startswith("|"))
-        return "\n".join(lines[first:end]) + "\n"
+        return first_table(lines, lines.index("## Answer"))
+    if part.startswith("table:"):
+        want = part[len("table:"):]
+        at = next(i for i, l in enumerate(lines) if l.startswith("#") and anchor(l.lstrip("#").strip()) == want)
+        return first_table(lines, at + 1)
     return "```console\n" + text + "```\n"
 pattern = re.compile(r"(<!-- generated from (\S+) -->\n)(.*?)(<!-- end generated -->)", re.S)
-readme.write_text(pattern.sub(lambda m: m.group(1) + content(m.group(2)) + m.group(4), readme.read_text()))
+root = pathlib.Path(sys.argv[1]).parent
+for name in sys.argv[1:]:
+    page = pathlib.Path(name)
+    page.write_text(pattern.sub(lambda m: m.group(1) + content(root, m.group(2)) + m.group(4), page.read_text()))
 PY
-echo "tour: $out; README blocks updated"
+echo "tour: $out; README and docs blocks updated"

@@ -85,7 +85,8 @@ void AnswerSection(Document& doc, const std::vector<CellAnswer>& cells, const st
   doc.Paragraph(
       "**How to read it.** Each cell names the filter to use for that geometry or material (rows) and roughness "
       "α (columns), with the number of the cell's tables (shots × cameras × derivative sources) in which it is "
-      "better than `none`: significantly steadier (`tv_err` intervals apart), not blurrier than " +
+      "better than `none`: significantly steadier (the 95 % interval of its `tv_err` minus `none`'s below 0, the "
+      "two measured on the same draws so that the reference's noise cancels), not blurrier than " +
       FormatNumber(kSpatialTolerance, "%g") + "× `none`'s spatial error, and within ±" +
       FormatNumber(100 * kEnergyTolerance, "%g") +
       " % of the highlight's energy. A pick is better in at least half of its cell's tables and has the lowest "

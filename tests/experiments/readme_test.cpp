@@ -12,6 +12,7 @@
 #include <string>
 
 #include "decision_rule.h"
+#include "report_document.h"
 #include "shimmer/experiments/output_files.h"
 
 namespace shimmer::experiments {
@@ -27,16 +28,9 @@ std::string Read(const fs::path& file) {
   return std::string((std::istreambuf_iterator<char>(in)), {});
 }
 
-// What readme-tour.sh puts in a block: a console transcript, or a report's
-// answer grid (its first table after "## Answer").
-std::string Expected(const std::string& source) {
-  const std::size_t hash = source.find('#');
-  const std::string text = Read(kRoot / source.substr(0, hash));
-  if (hash == std::string::npos) return "```console\n" + text + "```\n";
-  EXPECT_EQ(source.substr(hash + 1), "answer");
-  const std::size_t answer = text.find("\n## Answer\n");
-  EXPECT_NE(answer, std::string::npos) << source;
-  std::size_t table = text.find("\n|", answer) + 1;
+// The first table at or after line `start` of `text`.
+std::string FirstTable(const std::string& text, std::size_t start) {
+  std::size_t table = text.find("\n|", start) + 1;
   std::string out;
   while (table < text.size() && text[table] == '|') {
     const std::size_t end = text.find('\n', table);
@@ -44,6 +38,49 @@ std::string Expected(const std::string& source) {
     table = end + 1;
   }
   return out;
+}
+
+// What readme-tour.sh puts in a block: a console transcript, a report's
+// answer grid (its first table after "## Answer"), or the first table after
+// the heading with a given anchor (REPORT#table:ANCHOR).
+std::string Expected(const std::string& source) {
+  const std::size_t hash = source.find('#');
+  const std::string text = Read(kRoot / source.substr(0, hash));
+  if (hash == std::string::npos) return "```console\n" + text + "```\n";
+  const std::string part = source.substr(hash + 1);
+  if (part == "answer") {
+    const std::size_t answer = text.find("\n## Answer\n");
+    EXPECT_NE(answer, std::string::npos) << source;
+    return FirstTable(text, answer);
+  }
+  EXPECT_EQ(part.rfind("table:", 0), 0u) << source;
+  const std::string want = part.substr(6);
+  std::size_t line = 0;
+  while (line < text.size()) {
+    const std::size_t end = text.find('\n', line);
+    const std::string l = text.substr(line, end - line);
+    if (!l.empty() && l[0] == '#') {
+      const std::size_t title = l.find_first_not_of("# ");
+      if (title != std::string::npos && report::Anchor(l.substr(title)) == want) return FirstTable(text, end);
+    }
+    if (end == std::string::npos) break;
+    line = end + 1;
+  }
+  ADD_FAILURE() << source << ": no heading with that anchor";
+  return "";
+}
+
+// Every generated block of `page` against its source; how many there were.
+int CheckGeneratedBlocks(const fs::path& page) {
+  const std::string text = Read(page);
+  const std::regex block("<!-- generated from (\\S+) -->\n([\\s\\S]*?)<!-- end generated -->");
+  int blocks = 0;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), block); it != std::sregex_iterator(); ++it) {
+    const std::string source = (*it)[1];
+    EXPECT_EQ((*it)[2].str(), Expected(source)) << page << ": " << source << ": run scripts/readme-tour.sh --blocks-only";
+    ++blocks;
+  }
+  return blocks;
 }
 
 TEST(Readme, IsShortAndOpensWithTheTwoSetUpCommands) {
@@ -59,16 +96,16 @@ TEST(Readme, IsShortAndOpensWithTheTwoSetUpCommands) {
 }
 
 TEST(Readme, GeneratedBlocksEqualTheirSources) {
-  const std::string readme = Read(kRoot / "README.md");
-  const std::regex block("<!-- generated from (\\S+) -->\n([\\s\\S]*?)<!-- end generated -->");
+  EXPECT_GE(CheckGeneratedBlocks(kRoot / "README.md"), 6);
+  EXPECT_NE(Read(kRoot / "README.md").find("<!-- generated from results/standard/report.md#answer -->"),
+            std::string::npos);
+}
+
+TEST(Docs, GeneratedBlocksEqualTheirSources) {
   int blocks = 0;
-  for (auto it = std::sregex_iterator(readme.begin(), readme.end(), block); it != std::sregex_iterator(); ++it) {
-    const std::string source = (*it)[1];
-    EXPECT_EQ((*it)[2].str(), Expected(source)) << source << ": run scripts/readme-tour.sh";
-    ++blocks;
-  }
-  EXPECT_GE(blocks, 6);
-  EXPECT_NE(readme.find("<!-- generated from results/standard/report.md#answer -->"), std::string::npos);
+  for (const auto& entry : fs::directory_iterator(kRoot / "docs"))
+    if (entry.path().extension() == ".md") blocks += CheckGeneratedBlocks(entry.path());
+  EXPECT_GE(blocks, 2);
 }
 
 // Outside generated blocks, code and links, the only figures are the rule's

@@ -516,6 +516,10 @@ std::vector<Case> UnitCases() {
        2, "file/rep"},
       {"FitDbUnderAFile", Both(File("spec.json", FitSpec()), a_file), "fit spec.json --db file/f.db --work w", 2,
        "file/f.db"},
+      {"FitFromJsonMissing", File("spec.json", FitSpec()), "fit spec.json --from-json gone.json -o rep", 2,
+       "gone.json"},
+      {"FitFromJsonForeign", Both(File("spec.json", FitSpec()), File("f.json", "{\"fitz\": []}\n")),
+       "fit spec.json --from-json f.json -o rep", 2, "not a fit.json"},
       // merge
       {"MergeNoSuchStore", Nothing(), "merge a.db -o all.db", 2, "a.db"},
       {"MergeNotAStore", File("a.db", "just text\n"), "merge a.db -o all.db", 2, "a.db"},

@@ -61,8 +61,13 @@ def content(root, source):
     return "```console\n" + text + "```\n"
 pattern = re.compile(r"(<!-- generated from (\S+) -->\n)(.*?)(<!-- end generated -->)", re.S)
 root = pathlib.Path(sys.argv[1]).parent
+def fill(m):
+    if not (root / m.group(2).partition("#")[0]).exists():  # not made yet: the block stays as it is
+        print(f"readme-tour: warning: no {m.group(2)}; its block is left as it was", file=sys.stderr)
+        return m.group(0)
+    return m.group(1) + content(root, m.group(2)) + m.group(4)
 for name in sys.argv[1:]:
     page = pathlib.Path(name)
-    page.write_text(pattern.sub(lambda m: m.group(1) + content(root, m.group(2)) + m.group(4), page.read_text()))
+    page.write_text(pattern.sub(fill, page.read_text()))
 PY
 echo "tour: $out; README and docs blocks updated"

@@ -85,7 +85,10 @@ void JacobianPart(Document& doc, const std::vector<const Group*>& groups) {
         const Verdict apart = Separate(Ci95(*b->row, "energy_bias"), Ci95(*a->row, "energy_bias"));
         if (apart == Verdict::kBetter || apart == Verdict::kWorse) ++p->closer_apart;
       }
-      switch (Separate(Ci95(*b->row, "tv_err"), Ci95(*a->row, "tv_err"))) {
+      // Paired where the two rows were measured on the same draws (the decision rule's test).
+      const Evidence eb = EvidenceOf(*b->row), ea = EvidenceOf(*a->row);
+      const std::optional<PairedComparison> paired = PairedTvErr(eb, ea);
+      switch (paired ? SeparatePaired(*paired) : Separate(eb.tv_err_ci, ea.tv_err_ci)) {
         case Verdict::kBetter: ++p->lower; break;
         case Verdict::kWorse: ++p->higher; break;
         default: ++p->overlap; break;

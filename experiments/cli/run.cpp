@@ -102,6 +102,9 @@ void Run(const RunCliOptions& o) {
     std::printf("%s: %d shot references checked at twice the samples per axis, %d unconverged\n", spec.name.c_str(),
                 s.shots_checked, s.shots_unconverged);
   if (s.benchmarks) std::printf("%s: %d benchmark batches timed\n", spec.name.c_str(), s.benchmarks);
+  if (s.traits_added)
+    std::printf("%s: %d stored rows given their scene's traits (the report classes shots by them)\n",
+                spec.name.c_str(), s.traits_added);
   if (s.shots_unconverged)
     std::fprintf(stderr,
                  "shimmer: warning: %d shots have a reference that moved beyond reference.converge at twice the "

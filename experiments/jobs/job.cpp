@@ -228,11 +228,14 @@ Result<render::RenderSettings> ReferenceSettingsOf(const Job& job) {
 }
 
 json JobSources::ToJson() const {
-  return {{"kernel", test.kernel},
-          {"inputs", test.inputs},
-          {"reference_kernel", reference.kernel},
-          {"reference_inputs", reference.inputs},
-          {"metrics", metrics}};
+  json j = {{"kernel", test.kernel},
+            {"inputs", test.inputs},
+            {"reference_kernel", reference.kernel},
+            {"reference_inputs", reference.inputs},
+            {"metrics", metrics}};
+  if (scene.known)
+    j["scene"] = {{"sg_light", scene.sg_light}, {"normal_maps", scene.normal_maps}, {"sg_sharpness", scene.sg_sharpness}};
+  return j;
 }
 
 JobSources JobSources::FromJson(const json& j) {
@@ -241,6 +244,12 @@ JobSources JobSources::FromJson(const json& j) {
   s.test = {j.value("kernel", std::string()), j.value("inputs", std::string())};
   s.reference = {j.value("reference_kernel", std::string()), j.value("reference_inputs", std::string())};
   s.metrics = j.value("metrics", std::string());
+  if (const auto it = j.find("scene"); it != j.end() && it->is_object()) {
+    s.scene.known = true;
+    s.scene.sg_light = it->value("sg_light", false);
+    s.scene.normal_maps = it->value("normal_maps", false);
+    s.scene.sg_sharpness = it->value("sg_sharpness", 0.0);
+  }
   return s;
 }
 
@@ -263,6 +272,10 @@ Result<JobSources> ComputeSources(const Job& job) {
   auto fingerprint = render::FingerprintRender(*test);
   if (!fingerprint) return fingerprint.failure();
   sources.test = *fingerprint;
+  sources.scene.known = true;
+  sources.scene.sg_light = test->scene.light.type == shading::LightType::kSg;
+  sources.scene.sg_sharpness = sources.scene.sg_light ? test->scene.light.radius : 0.0;
+  sources.scene.normal_maps = (scene::SceneFeatures(test->scene) & shading::kSceneNormalMaps) != 0;
   auto reference = ReferenceFingerprint(job);
   if (!reference) return reference.failure();
   sources.reference = *reference;

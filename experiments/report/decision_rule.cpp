@@ -45,6 +45,7 @@ Evidence EvidenceOf(const JobResult& row) {
   if (auto sp = row.metrics.find("sparkles"); sp != row.metrics.end() && sp->is_object())
     e.sparkle_count_ratio = Metric(*sp, "mean_count_ratio");
   e.draws = row.draws;
+  e.reference_id = row.reference_id;
   e.tv_test = Metric(row.metrics, "tv_test");
   e.ref_noise = Metric(row.metrics, "ref_noise");
   e.joint_noise_sigma = Metric(row.metrics, "relmse_noise_sigma");
@@ -55,7 +56,11 @@ Evidence EvidenceOf(const JobResult& row) {
 
 namespace {
 
-bool Pair(const Evidence& a, const Evidence& b) { return a.draws && b.draws && a.draws->key == b.draws->key; }
+// Same draws (region, frames, seed) and the same reference: an external
+// sequence measured against its own reference does not pair with shimmer's rows.
+bool Pair(const Evidence& a, const Evidence& b) {
+  return a.draws && b.draws && a.draws->key == b.draws->key && a.reference_id == b.reference_id;
+}
 
 // The bootstrap interval of a - b widened in quadrature by 1.96 sigma.
 std::optional<PairedComparison> Paired(double a, const metrics::Replicates& ra, double b,
@@ -186,8 +191,8 @@ std::string DecisionRuleText() {
 
 std::string CellRowOf(const Group& group) {
   if (group.material.rfind("glints", 0) == 0) return "glints";
-  if (SgLitScene(group.scene)) return "SG-lit";
-  if (NormalMappedScene(group.scene)) return "normal-mapped";
+  if (SgLitScene(group)) return "SG-lit";
+  if (NormalMappedScene(group)) return "normal-mapped";
   return GeometryClass(group.scene);
 }
 

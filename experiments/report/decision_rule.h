@@ -78,6 +78,7 @@ struct Evidence {
   // For paired comparisons: the bootstrap's draws (null: compare unpaired),
   // and what the reference noise's share of a paired difference needs.
   std::shared_ptr<const metrics::BootstrapDraws> draws;
+  std::string reference_id;  // rows pair only against one reference: its noise is what cancels
   double tv_test = kNaN, ref_noise = kNaN, joint_noise_sigma = kNaN;
   int frames = 0;
   long long pixels = 0;

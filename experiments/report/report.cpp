@@ -207,25 +207,31 @@ Costs CostsOf(const Group& group) {
   return c;
 }
 
+SceneTraits TraitsOf(const JobResult& row) {
+  if (const JobSources sources = JobSources::FromJson(row.sources); sources.scene.known) return sources.scene;
+  SceneTraits traits;
+  const auto scene = scene::LoadScene(row.job.scene);
+  if (!scene) return traits;
+  traits.known = true;
+  traits.sg_light = scene->light.type == shading::LightType::kSg;
+  traits.sg_sharpness = traits.sg_light ? scene->light.radius : 0.0;
+  traits.normal_maps = (scene::SceneFeatures(*scene) & shading::kSceneNormalMaps) != 0;
+  return traits;
+}
+
 std::optional<double> SgSharpnessOf(const std::vector<JobResult>& rows) {
   std::set<std::string> seen;
   for (const JobResult& r : rows) {
     if (!seen.insert(r.job.scene).second) continue;
-    // A scene file that has gone since the run cannot say; it is not counted.
-    const auto scene = scene::LoadScene(r.job.scene);
-    if (scene && scene->light.type == shading::LightType::kSg) return scene->light.radius;
+    if (const SceneTraits traits = TraitsOf(r); traits.sg_light) return traits.sg_sharpness;
   }
   return std::nullopt;
 }
 
-bool SgLitScene(const std::string& scene) {
-  const auto loaded = scene::LoadScene(scene);
-  return loaded && loaded->light.type == shading::LightType::kSg;
-}
+bool SgLitScene(const Group& group) { return !group.rows.empty() && TraitsOf(*group.rows.front()).sg_light; }
 
-bool NormalMappedScene(const std::string& scene) {
-  const auto loaded = scene::LoadScene(scene);
-  return loaded && scene::SceneFeatures(*loaded) & shading::kSceneNormalMaps;
+bool NormalMappedScene(const Group& group) {
+  return !group.rows.empty() && TraitsOf(*group.rows.front()).normal_maps;
 }
 
 // Formats as engines ship them: block-compressed where the data survives it

@@ -89,6 +89,7 @@ std::string Csv(const std::vector<JobResult>& rows) {
     }
     Group g;
     g.scene = r.job.scene, g.material = r.job.material, g.alpha = AlphaOf(r.job.material);
+    g.rows = {&r};
     const auto none = none_of.find(shot(r));
     const Outcome outcome = none == none_of.end() ? Outcome::kUnknown
                             : none->second == &r  ? Outcome::kBaseline

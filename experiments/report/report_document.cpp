@@ -264,7 +264,7 @@ void SgAccuracySection(Document& doc, const SgAccuracyTable& sg) {
 void NormalMapMemorySection(Document& doc, const std::vector<Group>& groups) {
   std::vector<const Group*> mapped;
   for (const Group& g : groups)
-    if (NormalMappedScene(g.scene)) mapped.push_back(&g);
+    if (NormalMappedScene(g)) mapped.push_back(&g);
   if (mapped.empty()) return;
   doc.Heading(2, kNormalMapMemoryHeading);
   doc.Paragraph(

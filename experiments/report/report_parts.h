@@ -36,11 +36,14 @@ std::vector<Group> GroupRows(const std::vector<JobResult>& rows);
 double AlphaOf(const std::string& material);
 std::string RoughnessClass(double alpha);  // "α ≤ 0.02", "0.02 < α ≤ 0.1", "0.1 < α ≤ 0.3", "α > 0.3"
 std::string GeometryClass(const std::string& scene);
-// Whether the scene is lit by a spherical Gaussian (a scene file that has gone
-// since the run: no).
-bool SgLitScene(const std::string& scene);
-// Whether a primitive of the scene carries a normal map.
-bool NormalMappedScene(const std::string& scene);
+// A row's scene traits: those its run stored with it (JobSources::scene),
+// else, in a store from before they were kept, the scene loaded by name
+// (a scene file that has gone since: none).
+SceneTraits TraitsOf(const JobResult& row);
+// Whether the group's scene is lit by a spherical Gaussian, and whether a
+// primitive of it carries a normal map (TraitsOf its first row).
+bool SgLitScene(const Group& group);
+bool NormalMappedScene(const Group& group);
 
 // What an engine stores per texel for a normal-map filter (seed 003's memory
 // argument), by the variant's normal-map part; empty format for variants
@@ -122,8 +125,8 @@ std::string DeviceOf(const JobResult& row);  // "unrecorded" when empty
 
 std::string Csv(const std::vector<JobResult>& rows);
 
-// The light sharpness of the first row whose scene (scene::LoadScene) has an
-// SG light; nullopt when no row's does (or no scene loads).
+// The light sharpness of the first row whose scene has an SG light
+// (TraitsOf); nullopt when no row's does.
 std::optional<double> SgSharpnessOf(const std::vector<JobResult>& rows);
 
 struct PlotFile {

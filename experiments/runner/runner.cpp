@@ -425,6 +425,18 @@ Result<int> JobsToCompute(const std::vector<Job>& jobs, ResultStore& store) {
   return to_compute;
 }
 
+// Gives job `id`'s stored row its scene's traits when it lacks them.
+Status GiveSceneTraits(ResultStore& store, const Job& job, const std::string& id, int* given) {
+  const Result<bool> lacks = store.LacksSceneTraits(id);
+  if (!lacks) return lacks.failure();
+  if (!*lacks) return Ok();
+  const auto sources = SourcesOf(job);
+  if (!sources) return sources.failure();
+  if (Status updated = store.UpdateSources(id, sources->ToJson()); !updated) return updated;
+  ++*given;
+  return Ok();
+}
+
 }  // namespace
 
 RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) {
@@ -489,6 +501,16 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
         if (!failed.exchange(true)) summary.error = Prefixed("job " + id + " (" + what + ")", e);
       };
       if (!done) return stop(done.failure());
+      if (*done && !job.external) {
+        // A row stored before scene traits were kept gets them: the report
+        // classes shots from the store, not from scene files.
+        Status given = Ok();
+        {
+          std::lock_guard<std::mutex> lock(mutex);
+          given = GiveSceneTraits(*store, job, id, &summary.traits_added);
+        }
+        if (!given) return stop(given.failure());
+      }
       double seconds = 0;
       if (!*done) {
         const auto t0 = std::chrono::steady_clock::now();

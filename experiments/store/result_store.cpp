@@ -138,6 +138,27 @@ Result<bool> ResultStore::Has(const std::string& id) {
   return rc == SQLITE_ROW;
 }
 
+Result<bool> ResultStore::LacksSceneTraits(const std::string& id) {
+  Statement s;
+  const char* sql = "SELECT sources IS NOT NULL AND json_extract(sources, '$.scene') IS NULL FROM jobs WHERE id = ?";
+  if (sqlite3_prepare_v2(db_, sql, -1, &s.stmt, nullptr) != SQLITE_OK) return Failure("cannot read the jobs");
+  sqlite3_bind_text(s.stmt, 1, id.c_str(), -1, SQLITE_TRANSIENT);
+  const int rc = sqlite3_step(s.stmt);
+  if (rc != SQLITE_ROW && rc != SQLITE_DONE) return Failure("cannot read the jobs");
+  return rc == SQLITE_ROW && sqlite3_column_int(s.stmt, 0) != 0;
+}
+
+Status ResultStore::UpdateSources(const std::string& id, const nlohmann::json& sources) {
+  Statement s;
+  if (sqlite3_prepare_v2(db_, "UPDATE jobs SET sources = ? WHERE id = ?", -1, &s.stmt, nullptr) != SQLITE_OK)
+    return Failure("cannot write job " + id);
+  const std::string text = sources.dump();
+  sqlite3_bind_text(s.stmt, 1, text.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_text(s.stmt, 2, id.c_str(), -1, SQLITE_TRANSIENT);
+  if (sqlite3_step(s.stmt) != SQLITE_DONE) return Failure("cannot write job " + id);
+  return Ok();
+}
+
 Status ResultStore::Insert(const JobResult& r) {
   if (Status s = Exec("BEGIN IMMEDIATE;"); !s) return s;
   Statement s;

@@ -154,6 +154,7 @@ JobResult PairedRow(const std::string& variant, const RowNumbers& n, double own,
                     std::uint64_t seed) {
   JobResult r = Row("sphere", "ggx:0.01", "orbit", variant, n);
   r.draws = Draws(n.tv_err, own, key, seed);
+  r.reference_id = "shot-reference";
   r.metrics["frames"] = 48, r.metrics["pixels"] = 10, r.metrics["tv_test"] = 1.0;
   return r;
 }
@@ -176,6 +177,11 @@ TEST(DecisionRule, RowsOnTheSameDrawsCompareTheirDifference) {
   const JobResult other = PairedRow("none", n, 0.005, 8, 2);
   EXPECT_FALSE(PairedTvErr(EvidenceOf(a), EvidenceOf(other)));
   EXPECT_EQ(Decide(EvidenceOf(a), EvidenceOf(other)), Outcome::kTied);
+  // The same draws against another reference (an external sequence's own):
+  // their noises differ and do not cancel, so unpaired again.
+  JobResult external = PairedRow("none", n, 0.005, 7, 2);
+  external.reference_id = "engine-reference";
+  EXPECT_FALSE(PairedTvErr(EvidenceOf(a), EvidenceOf(external)));
 }
 
 TEST(DecisionRule, APairedTieIsUnresolvedOnlyWhereTheNoiseCrossTermDominatesIt) {

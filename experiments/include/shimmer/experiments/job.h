@@ -86,9 +86,20 @@ Result<render::RenderSettings> ReferenceSettingsOf(const Job& job);
 // ids): the fingerprints of its render and of its reference's render
 // (render::FingerprintRender: the specialized kernel module and the bytes it
 // reads) and the version of the metrics code.
+// What a report needs to know of a job's scene to class its shots, kept
+// with the row so that the report reads it from the store rather than
+// loading scene files that may have moved or changed since (no id hashes
+// it: the scene's content is in the fingerprint already).
+struct SceneTraits {
+  bool known = false;  // false in rows stored before traits were kept
+  bool sg_light = false, normal_maps = false;
+  double sg_sharpness = 0;  // the SG light's sharpness, with sg_light
+};
+
 struct JobSources {
   render::RenderFingerprint test, reference;
   std::string metrics;
+  SceneTraits scene;
   nlohmann::json ToJson() const;
   static JobSources FromJson(const nlohmann::json& j);  // empty fields where `j` lacks them
 };

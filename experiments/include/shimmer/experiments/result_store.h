@@ -146,6 +146,11 @@ class ResultStore {
 
   Result<bool> Has(const std::string& id);
   Status Insert(const JobResult& result);
+  // Whether job `id`'s row lacks its scene's traits (stored before they
+  // were kept), and gives them to it: the row's sources JSON replaced by
+  // `sources`, which must describe the same job (same id).
+  Result<bool> LacksSceneTraits(const std::string& id);
+  Status UpdateSources(const std::string& id, const nlohmann::json& sources);
   Result<std::vector<JobResult>> All();
   Result<std::optional<JobResult>> Get(const std::string& id);
 

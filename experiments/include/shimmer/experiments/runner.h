@@ -47,6 +47,7 @@ struct RunSummary {
   int total = 0, skipped = 0, computed = 0;
   int shots_checked = 0, shots_unconverged = 0;  // checks run by this run, and how many failed
   int benchmarks = 0;                            // batches timed by this run
+  int traits_added = 0;                          // stored rows given their scene's traits (SceneTraits)
   std::optional<Error> error;                    // set when a job failed; the jobs before it are stored
 };
 

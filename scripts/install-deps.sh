@@ -10,6 +10,7 @@ packages=(
   libopencv-dev libopenexr-dev openexr libdeflate-dev
   libceres-dev libeigen3-dev
   libcli11-dev nlohmann-json3-dev libsqlite3-dev libglm-dev
+  libtinygltf-dev libtinyobjloader-dev
   libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
   gnuplot-nox chromium
   slurm-wlm munge sqlite3

@@ -40,4 +40,7 @@ for spec in "${specs[@]}"; do
   # shellcheck disable=SC2086 # the options are words
   "$shimmer" report "runs/$spec/results.db" -o "results/$spec" --title "${title[$spec]}" ${options[$spec]:-}
 done
+# The README's and the docs' generated blocks follow the reports.
+echo "== tour: $(date -u +%H:%M:%S)"
+SHIMMER_BUILD_DIR="$(dirname "$(dirname "$shimmer")")" bash "$root/scripts/readme-tour.sh"
 echo "== done: $(date -u +%H:%M:%S)"

@@ -17,16 +17,18 @@ out="$root/results/speed"
 for b in shading_bench renderer_bench metrics_bench; do
   [ -x "$bench/$b" ] || { echo "speed-report: error: no $bench/$b (configure with -DSHIMMER_BUILD_BENCH=ON and build)" >&2; exit 2; }
 done
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-mkdir -p "$out"
+# The benchmarks' own JSON is kept beside the report (results/speed/*.json):
+# the report can be made again from it (scripts/speed_report.py DIR OUT).
+work="$out/json"
+mkdir -p "$work"
 export SHIMMER_PYTHON="${SHIMMER_PYTHON:-/usr/bin/python3}"
 run() {  # NAME BINARY ARGS...: JSON into $work/NAME.json, progress on stderr
   local name=$1 binary=$2
   shift 2
   echo "speed-report: $name $(date -u +%H:%M:%S)" >&2
-  "$bench/$binary" --benchmark_format=json --benchmark_out="$work/$name.json" --benchmark_out_format=json "$@" \
+  "$bench/$binary" --benchmark_format=json --benchmark_out="$work/$name.json.tmp" --benchmark_out_format=json "$@" \
     >/dev/null
+  mv "$work/$name.json.tmp" "$work/$name.json"
 }
 run shading shading_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 run renderer renderer_bench --benchmark_repetitions=3 --benchmark_enable_random_interleaving=true \

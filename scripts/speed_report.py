@@ -130,10 +130,18 @@ def main(json_dir, out_path):
               "| variant | quad ms/frame | ratio to `none` | analytic ms/frame | ratio to `none` |",
               "|---|---:|---:|---:|---:|"]
     variants = ["none"] + sorted({n.split("/")[1] for n in renderer if n.startswith("frame/")} - {"none"})
+    elsewhere = []
     for v in variants:
         q, a = frame(v, "quad"), frame(v, "analytic")
+        if q is None and a is None:
+            elsewhere.append(v)  # needs an SG light, a normal map or a glint material: not on this shot
+            continue
         lines.append(f"| `{v}` | {fmt(q)} | {fmt(ratio(q, none_quad))} | {fmt(a)} | {fmt(ratio(a, none_analytic))} |")
     lines.append("")
+    if elsewhere:
+        lines += ["Not timed on this shot, which has no SG light, normal map or glint material for them: " +
+                  ", ".join(f"`{v}`" for v in elsewhere) +
+                  ". Each report's shot tables give their cost on their own scenes (the `run` benchmark).", ""]
     exr = next((time_of(r) for n, r in renderer.items() if n.startswith("exr_write")), None)
     none_row = renderer.get("frame/none/quad/iterations:8/manual_time", {})
     lines += ["## Where a frame's time goes", "",

@@ -1,11 +1,17 @@
 // shimmer scene validate FILE | shimmer scene preview FILE -o scene.png
 //
 // A scene author's loop: check the file (every error names the JSON Pointer
-// of the key at fault) and look at it, without rendering a sequence.
+// of the key at fault, or the asset file and its problem) and look at it,
+// without rendering a sequence.
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
+#include <limits>
 #include <memory>
 
 #include "commands.h"
+#include "shimmer/renderer/mesh_loading.h"
 #include "shimmer/renderer/renderer.h"
 #include "shimmer/renderer/scene.h"
 
@@ -23,7 +29,36 @@ struct SceneOptions {
   std::string out;
 };
 
+bool IsAssetFile(const std::string& file) {
+  std::string extension = std::filesystem::path(file).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
+  return extension == ".gltf" || extension == ".glb" || extension == ".obj";
+}
+
+// A mesh asset: what it holds (meshes, triangles, materials as shimmer reads
+// them, its bounds), then each warning of the loader (normals or tangents
+// computed, zero-area triangles or UV triangles) on a line of its own.
+void ValidateAsset(const std::string& file) {
+  const scene::MeshAsset asset = Take(scene::LoadMeshAsset(file));
+  std::size_t vertices = 0;
+  glm::vec3 lo(std::numeric_limits<float>::max()), hi(std::numeric_limits<float>::lowest());
+  for (const scene::TriangleMesh& m : asset.meshes) {
+    vertices += m.positions.size();
+    for (const glm::vec3& p : m.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  }
+  std::printf("%s: valid asset: %zu meshes, %zu triangles, %zu vertices, bounds (%g, %g, %g) to (%g, %g, %g)\n",
+              file.c_str(), asset.meshes.size(), asset.triangle_count(), vertices, lo.x, lo.y, lo.z, hi.x, hi.y,
+              hi.z);
+  for (const scene::TriangleMesh& m : asset.meshes)
+    std::printf("  %s: %zu triangles, material '%s': roughness %g (alpha %g), normal texture %s, roughness texture %s\n",
+                m.name.empty() ? "(unnamed mesh)" : m.name.c_str(), m.triangle_count(), m.material.name.c_str(),
+                m.material.roughness, m.material.alpha(), m.material.normal_texture.present() ? "yes" : "no",
+                m.material.metallic_roughness_texture.present() ? "yes" : "no");
+  for (const std::string& w : asset.warnings) std::fprintf(stderr, "shimmer: warning: %s\n", w.c_str());
+}
+
 void Validate(const SceneOptions& o) {
+  if (IsAssetFile(o.scene)) return ValidateAsset(o.scene);
   const scene::Scene s = Take(scene::LoadScene(o.scene));
   int counts[3] = {0, 0, 0};
   for (const scene::Primitive& p : s.primitives) ++counts[static_cast<int>(p.type)];
@@ -63,8 +98,9 @@ void AddSceneCommand(CLI::App& app) {
   cmd->footer("Scene files: docs/scenes.md (every key, its type, unit and default).");
 
   auto v = std::make_shared<SceneOptions>();
-  CLI::App* validate = cmd->add_subcommand("validate", "Check a scene file; print what it holds, or the first error");
-  validate->add_option("scene", v->scene, "JSON scene file (or a built-in scene name)")->required();
+  CLI::App* validate = cmd->add_subcommand(
+      "validate", "Check a scene file or a mesh asset (.gltf, .glb, .obj); print what it holds, or the first error");
+  validate->add_option("scene", v->scene, "JSON scene file, built-in scene name, or mesh asset file")->required();
   validate->callback([v] { Validate(*v); });
 
   auto p = std::make_shared<SceneOptions>();

@@ -425,6 +425,12 @@ std::vector<Case> UnitCases() {
        File("s.json", R"({"primitives": [{"type": "plane"}], "light": {"direction": [0, 1, 0], "colour": 1}})"),
        "scene validate s.json", 2, "s.json: /light/colour: unknown key"},
       {"SceneValidateMissingFile", Nothing(), "scene validate nowhere.json", 2, "nowhere.json"},
+      // scene validate on a mesh asset: the loader's one error naming the file
+      {"SceneValidateAssetMissing", Nothing(), "scene validate gone.glb", 2, "gone.glb"},
+      {"SceneValidateAssetTruncatedGlb", File("t.glb", "glTF\x02\x00\x00\x00"), "scene validate t.glb", 2, "t.glb"},
+      {"SceneValidateAssetBadIndex", File("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"),
+       "scene validate bad.obj", 2, "bad.obj"},
+      {"SceneValidateAssetNoTriangles", File("empty.obj", "v 0 0 0\n"), "scene validate empty.obj", 2, "empty.obj"},
       {"SceneValidateNoFile", Nothing(), "scene validate", 2, "scene is required"},
       {"SceneNoAction", Nothing(), "scene", 2, "subcommand"},
       {"ScenePreviewBadScene", File("s.json", R"({"primitives": [{"type": "cube"}]})"), "scene preview s.json -o p.png",
@@ -667,6 +673,20 @@ TEST(SceneCli, ValidatePrintsWhatTheFileHolds) {
                        "material beckmann:0.2"),
             std::string::npos)
       << o.out;
+}
+
+// `scene validate` on a mesh asset: exit 0, what it holds, and each
+// loader warning (computed normals, a zero-area triangle) on stderr.
+TEST(SceneCli, ValidateAnAssetPrintsItsMeshesAndWarnings) {
+  const fs::path dir = Root() / "SceneValidateAsset";
+  WriteText(dir / "quad.obj", "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nv 5 5 5\n"
+                              "f 1 2 3\nf 1 3 4\nf 5 5 5\n");
+  const Outcome o = RunShimmer(dir, "scene validate quad.obj");
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.out.find("quad.obj: valid asset: 1 meshes, 3 triangles"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("bounds (0, 0, 0) to (5, 5, 5)"), std::string::npos) << o.out;
+  EXPECT_NE(o.err.find("normals computed"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("zero area"), std::string::npos) << o.err;
 }
 
 // `scene preview`: a PNG of the requested size, written whole under its name.

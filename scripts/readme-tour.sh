@@ -34,6 +34,18 @@ step metrics.txt shimmer metrics demo demo-ref --highlight-mask --highlight-thre
 step metrics-filter.txt shimmer metrics demo-tk21 demo-ref --highlight-mask --highlight-threshold 0.1
 step sweep.txt shimmer sweep --scene sphere --material ggx:0.01 --variant k16-beckmann-rect \
   --param fp_max=0.01:1:4 --log --size 48 48 --frames 8
+# The guide's filter math (docs/guide.md, section 1): one filter evaluated directly.
+step ndf.txt shimmer ndf --variant k16-beckmann-rect --alpha 0.01 --slope 0.03 0 --footprint 0.05 0.02 --json
+step ndf-rect-float.txt shimmer ndf --variant k16-ggx-rect --param fp_min_cap=0 --alpha 0.01 --slope 0.05 0 \
+  --footprint 1e-6 1e-6 --precision float
+step ndf-rect-stable-float.txt shimmer ndf --variant k16-ggx-rect-stable --alpha 0.01 --slope 0.05 0 \
+  --footprint 1e-6 1e-6 --precision float
+step ndf-rect-stable-double.txt shimmer ndf --variant k16-ggx-rect-stable --alpha 0.01 --slope 0.05 0 \
+  --footprint 1e-6 1e-6 --precision double
+step ndf-centre-jacobian.txt shimmer ndf --variant k16-ggx-rect-stable --alpha 0.2 --slope 2 0 --footprint 1 1 \
+  --precision float
+step ndf-inner-jacobian.txt shimmer ndf --variant k16-ggx-rect-jacobian --alpha 0.2 --slope 2 0 --footprint 1 1 \
+  --precision float
 fi
 cd "$root"
 # The generated blocks of the README and of docs/*.md: a console transcript

@@ -227,6 +227,15 @@ Result<render::RenderSettings> ReferenceSettingsOf(const Job& job) {
   return reference;
 }
 
+SceneTraits TraitsOfScene(const scene::Scene& scene) {
+  SceneTraits traits;
+  traits.known = true;
+  traits.sg_light = scene.light.type == shading::LightType::kSg;
+  traits.sg_sharpness = traits.sg_light ? scene.light.radius : 0.0;
+  traits.normal_maps = (scene::SceneFeatures(scene) & shading::kSceneNormalMaps) != 0;
+  return traits;
+}
+
 json JobSources::ToJson() const {
   json j = {{"kernel", test.kernel},
             {"inputs", test.inputs},
@@ -272,10 +281,7 @@ Result<JobSources> ComputeSources(const Job& job) {
   auto fingerprint = render::FingerprintRender(*test);
   if (!fingerprint) return fingerprint.failure();
   sources.test = *fingerprint;
-  sources.scene.known = true;
-  sources.scene.sg_light = test->scene.light.type == shading::LightType::kSg;
-  sources.scene.sg_sharpness = sources.scene.sg_light ? test->scene.light.radius : 0.0;
-  sources.scene.normal_maps = (scene::SceneFeatures(test->scene) & shading::kSceneNormalMaps) != 0;
+  sources.scene = TraitsOfScene(test->scene);
   auto reference = ReferenceFingerprint(job);
   if (!reference) return reference.failure();
   sources.reference = *reference;

@@ -58,6 +58,8 @@ namespace {
 
 // Same draws (region, frames, seed) and the same reference: an external
 // sequence measured against its own reference does not pair with shimmer's rows.
+constexpr double kZ95 = 1.959963984540054;  // the normal's two-sided 95 % quantile
+
 bool Pair(const Evidence& a, const Evidence& b) {
   return a.draws && b.draws && a.draws->key == b.draws->key && a.reference_id == b.reference_id;
 }
@@ -69,7 +71,7 @@ std::optional<PairedComparison> Paired(double a, const metrics::Replicates& ra, 
   if (!ci) return std::nullopt;
   PairedComparison out;
   out.difference = a - b;
-  const double noise = 1.959963984540054 * (std::isnan(sigma) ? 0.0 : sigma);
+  const double noise = kZ95 * (std::isnan(sigma) ? 0.0 : sigma);
   out.ci.lo = out.difference - std::hypot(out.difference - ci->lo, noise);
   out.ci.hi = out.difference + std::hypot(ci->hi - out.difference, noise);
   const double half = 0.5 * (out.ci.hi - out.ci.lo);
@@ -95,11 +97,26 @@ std::optional<PairedComparison> PairedJoint(const Evidence& a, const Evidence& b
   return Paired(a.joint, a.draws->relmse, b.joint, b.draws->relmse, sigma);
 }
 
-double NoiseShare(const Evidence& a, const Evidence& b) {
-  if (auto paired = PairedTvErr(a, b)) return paired->noise_share;
+namespace {
+
+// NoiseShare with the pair already compared (or not pairing: nullopt).
+double ShareOf(const Evidence& a, const Evidence& b, const std::optional<PairedComparison>& paired) {
+  if (paired) return paired->noise_share;
   if (std::isnan(a.noise_share) && std::isnan(b.noise_share)) return kNaN;
   return std::max(std::isnan(a.noise_share) ? 0.0 : a.noise_share, std::isnan(b.noise_share) ? 0.0 : b.noise_share);
 }
+
+// NoiseBelowVisibility with the share already known.
+bool BelowVisibility(const Evidence& v, const Evidence& none, double share) {
+  if (!(share > kNoiseShareLimit)) return false;
+  // Both rows share the reference; the larger contrast decides.
+  const double contrast = std::max(v.noise_contrast, none.noise_contrast);
+  return contrast < kVisibleContrast;  // false when either is unknown (NaN)
+}
+
+}  // namespace
+
+double NoiseShare(const Evidence& a, const Evidence& b) { return ShareOf(a, b, PairedTvErr(a, b)); }
 
 Verdict SeparatePaired(const PairedComparison& d) {
   if (!(d.ci.lo == d.ci.lo) || !(d.ci.hi == d.ci.hi)) return Verdict::kUnknown;
@@ -133,15 +150,14 @@ Outcome Decide(const Evidence& v, const Evidence& none) {
     case Verdict::kWorse: return Outcome::kLessSteady;
     default: break;
   }
-  if (NoiseShare(v, none) > kNoiseShareLimit && !NoiseBelowVisibility(v, none)) return Outcome::kUnresolved;
+  // The pair is compared once: its noise share decides a tie too.
+  const double share = ShareOf(v, none, paired);
+  if (share > kNoiseShareLimit && !BelowVisibility(v, none, share)) return Outcome::kUnresolved;
   return Outcome::kTied;
 }
 
 bool NoiseBelowVisibility(const Evidence& v, const Evidence& none) {
-  if (!(NoiseShare(v, none) > kNoiseShareLimit)) return false;
-  // Both rows share the reference; the larger contrast decides.
-  const double contrast = std::max(v.noise_contrast, none.noise_contrast);
-  return contrast < kVisibleContrast;  // false when either is unknown (NaN)
+  return BelowVisibility(v, none, NoiseShare(v, none));
 }
 
 std::string OutcomeText(Outcome outcome) {

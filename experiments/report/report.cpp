@@ -209,14 +209,8 @@ Costs CostsOf(const Group& group) {
 
 SceneTraits TraitsOf(const JobResult& row) {
   if (const JobSources sources = JobSources::FromJson(row.sources); sources.scene.known) return sources.scene;
-  SceneTraits traits;
   const auto scene = scene::LoadScene(row.job.scene);
-  if (!scene) return traits;
-  traits.known = true;
-  traits.sg_light = scene->light.type == shading::LightType::kSg;
-  traits.sg_sharpness = traits.sg_light ? scene->light.radius : 0.0;
-  traits.normal_maps = (scene::SceneFeatures(*scene) & shading::kSceneNormalMaps) != 0;
-  return traits;
+  return scene ? TraitsOfScene(*scene) : SceneTraits{};
 }
 
 std::optional<double> SgSharpnessOf(const std::vector<JobResult>& rows) {

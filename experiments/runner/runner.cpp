@@ -11,11 +11,13 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <optional>
 #include <set>
 #include <thread>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -377,15 +379,15 @@ Result<RunPlan> PlanRun(const std::vector<Job>& all_jobs, const RunOptions& opti
     if (it == by_description.end()) {
       planned.why = {"new job"};
     } else {
-      // What changed since the closest stored version: the fewest reasons
-      // (a row with sources says more than a legacy one).
+      // What changed since the closest stored version: a row with sources
+      // before a legacy one (it says more), then the fewest reasons.
+      std::pair<bool, std::size_t> closest{true, std::numeric_limits<std::size_t>::max()};
       for (const JobResult* stored : it->second) {
-        std::vector<std::string> why = stored->sources.is_null()
-                                           ? std::vector<std::string>{kLegacyRowReason}
-                                           : WhyRerun(job, JobSources::FromJson(stored->sources), *now);
-        const bool legacy_before = !planned.why.empty() && planned.why.front() == kLegacyRowReason;
-        if (planned.why.empty() || why.size() < planned.why.size() || (legacy_before && !stored->sources.is_null()))
-          planned.why = std::move(why);
+        const bool legacy = stored->sources.is_null();
+        std::vector<std::string> why = legacy ? std::vector<std::string>{kLegacyRowReason}
+                                              : WhyRerun(job, JobSources::FromJson(stored->sources), *now);
+        if (const std::pair<bool, std::size_t> rank{legacy, why.size()}; rank < closest)
+          closest = rank, planned.why = std::move(why);
       }
     }
     if (planned.why.empty()) planned.why = {"new job"};

@@ -108,12 +108,13 @@ Result<std::unique_ptr<ResultStore>> ResultStore::Open(const std::string& path, 
                                                      : "not a shimmer results store");
   // Stores from before the device (sources, draws) columns get them; their old rows read NULL.
   const std::set<std::string> columns = ColumnsOf(db, "main");
-  for (const char* column : {"device TEXT", "driver TEXT", "sources TEXT", "draws BLOB"}) {
-    const std::string name = std::string(column).substr(0, std::string(column).find(' '));
+  for (const auto& [name, type] : {std::pair<std::string, std::string>{"device", "TEXT"},
+                                   {"driver", "TEXT"},
+                                   {"sources", "TEXT"},
+                                   {"draws", "BLOB"}})
     if (!columns.count(name))
-      if (Status s = store->Exec(std::string("ALTER TABLE jobs ADD COLUMN ") + column + ";"); !s)
+      if (Status s = store->Exec("ALTER TABLE jobs ADD COLUMN " + name + " " + type + ";"); !s)
         return store->Failure("cannot add the " + name + " column");
-  }
   if (!ColumnsOf(db, "main", "fits").count("map"))
     if (Status s = store->Exec(kFitsByMap); !s) {
       (void)store->Exec("ROLLBACK;");  // the failure reported is the one above

@@ -96,6 +96,9 @@ struct SceneTraits {
   double sg_sharpness = 0;  // the SG light's sharpness, with sg_light
 };
 
+// The traits of a loaded scene.
+SceneTraits TraitsOfScene(const scene::Scene& scene);
+
 struct JobSources {
   render::RenderFingerprint test, reference;
   std::string metrics;

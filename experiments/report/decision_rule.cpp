@@ -6,6 +6,7 @@
 #include <set>
 
 #include "shimmer/experiments/output_files.h"
+#include "shimmer/shading/shading.h"
 
 namespace shimmer::experiments::report {
 
@@ -14,6 +15,16 @@ namespace {
 bool Meets(const Interval& energy, double point) {
   if (energy.Known()) return energy.lo <= kEnergyTolerance && energy.hi >= -kEnergyTolerance;
   return std::abs(point) <= kEnergyTolerance;
+}
+
+// A ratio to the reference inside [1/tolerance, tolerance]; NaN (no sparkle
+// statistics, or none in the reference) passes, 0 (no sparkle at all) does not.
+bool Within(double ratio, double tolerance) { return !(ratio < 1 / tolerance || ratio > tolerance); }
+
+bool KeepsGlints(const Evidence& v) {
+  return Within(v.sparkle_count_ratio, kSparkleTolerance) &&
+         Within(v.sparkle_variance_ratio, kSparkleTolerance * kSparkleTolerance) &&
+         Within(v.sparkle_lifetime_ratio, kSparkleTolerance);
 }
 
 bool Near(double value, double baseline) {
@@ -42,8 +53,13 @@ Evidence EvidenceOf(const JobResult& row) {
   if (std::isnan(e.spatial)) e.spatial = e.joint, e.spatial_ci = e.joint_ci;
   const double noise = Metric(row.metrics, "ref_noise"), mean = Metric(row.metrics, "ref_mean");
   if (noise >= 0 && mean > 0) e.noise_contrast = std::sqrt(noise) / mean;
-  if (auto sp = row.metrics.find("sparkles"); sp != row.metrics.end() && sp->is_object())
+  if (auto sp = row.metrics.find("sparkles"); sp != row.metrics.end() && sp->is_object()) {
     e.sparkle_count_ratio = Metric(*sp, "mean_count_ratio");
+    e.sparkle_variance_ratio = Metric(*sp, "count_variance_ratio");
+    e.sparkle_lifetime_ratio = Metric(*sp, "lifetime_ratio");
+  }
+  const shading::VariantInfo* info = shading::FindVariant(row.job.variant);
+  e.smooth_limit = info && info->smooth_limit;
   e.draws = row.draws;
   e.reference_id = row.reference_id;
   e.tv_test = Metric(row.metrics, "tv_test");
@@ -134,6 +150,7 @@ Verdict Separate(Interval a, Interval b) {
 
 Outcome Decide(const Evidence& v, const Evidence& none) {
   if (!v.tv_err_ci.Known() || !none.tv_err_ci.Known()) return Outcome::kUnknown;
+  if (v.smooth_limit) return Outcome::kSmoothLimit;
   if (Near(v.tv_err, none.tv_err) && (std::isnan(v.joint) || Near(v.joint, none.joint))) return Outcome::kNoEffect;
   const std::optional<PairedComparison> paired = PairedTvErr(v, none);
   switch (paired ? SeparatePaired(*paired) : Separate(v.tv_err_ci, none.tv_err_ci)) {
@@ -142,9 +159,7 @@ Outcome Decide(const Evidence& v, const Evidence& none) {
                             v.spatial_ci.lo > kSpatialTolerance * none.spatial_ci.hi;
       if (blurrier) return Outcome::kBlurrier;
       if (!Meets(v.energy_ci, v.energy_bias)) return Outcome::kLosesEnergy;
-      // NaN (no sparkle statistics) passes; a ratio of 0 (no sparkle at all) does not.
-      if (v.sparkle_count_ratio < 1 / kSparkleTolerance || v.sparkle_count_ratio > kSparkleTolerance)
-        return Outcome::kLosesGlints;
+      if (!KeepsGlints(v)) return Outcome::kLosesGlints;
       return Outcome::kBetter;
     }
     case Verdict::kWorse: return Outcome::kLessSteady;
@@ -168,6 +183,7 @@ std::string OutcomeText(Outcome outcome) {
     case Outcome::kBlurrier: return "steadier, blurrier";
     case Outcome::kLosesEnergy: return "steadier, loses energy";
     case Outcome::kLosesGlints: return "steadier, loses the glints";
+    case Outcome::kSmoothLimit: return "smooth limit (no glints)";
     case Outcome::kLessSteady: return "less steady";
     case Outcome::kUnresolved: return "unresolved: reference noise";
     case Outcome::kBaseline: return "baseline";
@@ -187,9 +203,14 @@ std::string DecisionRuleText() {
          "× the upper end of `none`'s (else **steadier, blurrier**); and (3) it keeps the highlight: its "
          "`energy_bias` interval meets ±" +
          FormatNumber(kEnergyTolerance, "%.2f") +
-         " (else **steadier, loses energy**); on a glint material (4) it shows between 1/" +
+         " (else **steadier, loses energy**); on a glint material (4) its sparkles per frame and their "
+         "lifetime lie between 1/" +
          FormatNumber(kSparkleTolerance, "%g") + " and " + FormatNumber(kSparkleTolerance, "%g") +
-         "× the reference's sparkles per frame (else **steadier, loses the glints**). A variant within " + FormatNumber(100 * kNilEffect, "%g") +
+         "× the reference's and the count's variance over frames between 1/" +
+         FormatNumber(kSparkleTolerance * kSparkleTolerance, "%g") + " and " +
+         FormatNumber(kSparkleTolerance * kSparkleTolerance, "%g") +
+         "× (else **steadier, loses the glints**); the glint material's limit without sparkles (`glints-smooth`, "
+         "D_g) is the **smooth limit**, a bound and never a pick. A variant within " + FormatNumber(100 * kNilEffect, "%g") +
          " % of `none` in both `tv_err` and the joint error has **no effect**; one whose difference interval holds 0 "
          "is **≈ none**, or **unresolved: reference noise** when the reference's noise is over " +
          FormatNumber(100 * kNoiseShareLimit, "%g") +

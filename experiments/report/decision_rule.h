@@ -58,9 +58,13 @@ constexpr double kNilEffect = 0.02;
 
 // Glints: a filter that shows fewer than half or more than twice the
 // reference's sparkles per frame changes the material's look (glittering
-// paint reads as satin, or as noise), however steady it is; the sparkle
-// count ratio (docs/metrics.md, "Sparkle statistics") must stay within
-// [1/kSparkleTolerance, kSparkleTolerance].
+// paint reads as satin, or as noise), however steady it is; so does one
+// whose sparkles live half or twice as long (they twinkle or smear). The
+// sparkle count ratio and the lifetime ratio (docs/metrics.md, "Sparkle
+// statistics") must stay within [1/kSparkleTolerance, kSparkleTolerance],
+// and the count's variance over frames, which scales as the count's square
+// (a count half as large and as steady has a quarter of the variance),
+// within the square of that range.
 constexpr double kSparkleTolerance = 2.0;
 
 // A pick must be better than `none` in at least this share of its cell's
@@ -73,6 +77,8 @@ constexpr double kPickShare = 0.5;
 struct Evidence {
   double tv_err = kNaN, joint = kNaN, spatial = kNaN, energy_bias = kNaN, noise_share = kNaN;
   double sparkle_count_ratio = kNaN;  // with sparkle statistics: test's mean count over the reference's
+  double sparkle_variance_ratio = kNaN, sparkle_lifetime_ratio = kNaN;  // the count's variance, a sparkle's life
+  bool smooth_limit = false;  // the variant is a glint material's limit without sparkles (glints-smooth)
   double noise_contrast = kNaN;       // sqrt(ref_noise) / ref_mean; NaN in stores measured before it
   Interval tv_err_ci, joint_ci, spatial_ci, energy_ci;
   // For paired comparisons: the bootstrap's draws (null: compare unpaired),
@@ -111,7 +117,8 @@ enum class Outcome {
   kNoEffect,     // within kNilEffect of `none` in tv_err and the joint error
   kBlurrier,     // steadier, but its spatial error's interval lies above kSpatialTolerance x none's
   kLosesEnergy,  // steadier, but its energy interval misses ±kEnergyTolerance
-  kLosesGlints,  // steadier, but its sparkle count ratio leaves [1/kSparkleTolerance, kSparkleTolerance]
+  kLosesGlints,  // steadier, but a sparkle ratio leaves its tolerance (kSparkleTolerance)
+  kSmoothLimit,  // the glint material's limit without sparkles: a bound, not a filter to pick
   kLessSteady,   // tv_err interval wholly above none's
   kUnresolved,   // tied where the reference's noise is over kNoiseShareLimit of the comparison
                  // (NoiseShare) and its contrast is not below kVisibleContrast (or not known)

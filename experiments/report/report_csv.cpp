@@ -37,6 +37,9 @@ std::string Csv(const std::vector<JobResult>& rows) {
   // draws pair: tv_err's difference to `none`'s, its 95 % interval, and the
   // reference noise's share of that interval (decision_rule.h, NoiseShare).
   header.insert(header.end(), {"tv_err_vs_none", "tv_err_vs_none_lo", "tv_err_vs_none_hi", "vs_none_noise_share"});
+  // The glint part of the rule: the other two sparkle ratios, and whether
+  // the variant is a glint material's smooth limit (1) or not (0).
+  header.insert(header.end(), {"sparkle_variance_ratio", "sparkle_lifetime_ratio", "smooth_limit"});
   // How many of the report's tables a row sits in: `none` and supersample-N
   // read no derivatives and join each derivative source's table of their shot.
   std::map<const JobResult*, int> tables;
@@ -120,6 +123,9 @@ std::string Csv(const std::vector<JobResult>& rows) {
                                    CsvNumber(paired->noise_share)});
     else
       fields.insert(fields.end(), {"", "", "", ""});
+    const Evidence evidence = EvidenceOf(r);
+    fields.insert(fields.end(), {CsvNumber(evidence.sparkle_variance_ratio), CsvNumber(evidence.sparkle_lifetime_ratio),
+                                 evidence.smooth_limit ? "1" : "0"});
     table.AddRow(fields);
   }
   return table.Text();

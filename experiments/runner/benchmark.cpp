@@ -1,15 +1,10 @@
 // Cost as a benchmark, not a by-product (DESIGN.md, Trust): the per-job GPU
 // time of small metric renders on shared cores swings by 2x between runs,
 // so costs come from dedicated renders at a benchmark size, every variant of
-// a batch interleaved repetition by repetition, after a warm-up frame that
-// takes the JIT. Within a repetition each variant's frame sits between two
-// frames of `none` (none, v1, none, v2, …, none), and its ratio is to their
-// geometric mean: a pair then lies a frame apart, not a whole batch, and
-// the machine's slow spells cancel better (measured on the quick spec's
-// sphere-field batch: the intervals halve against pairing each variant with
-// the repetition's one `none` frame). Each ratio to `none` is the geometric
-// mean of the paired per-repetition ratios, with a Student-t 95 % interval
-// on their logarithms; rounds of
+// a batch interleaved repetition by repetition (a slow spell of the machine
+// then hits all of them alike), after a warm-up frame that takes the JIT.
+// Each ratio to `none` is the geometric mean of the paired per-repetition
+// ratios, with a Student-t 95 % interval on their logarithms; rounds of
 // repetitions are added until every interval is within the spec's precision
 // (±3 % by default) or the repetition cap is reached. The order of the
 // variants reverses every repetition (ABBA), so a drift within a repetition
@@ -58,15 +53,6 @@ RatioEstimate PairedRatio(const std::vector<double>& test_ms, const std::vector<
   return r;
 }
 
-std::vector<std::size_t> BenchmarkOrder(std::size_t renderers, int repetition) {
-  std::vector<std::size_t> order{0};
-  for (std::size_t i = 1; i < renderers; ++i) {
-    order.push_back(repetition % 2 ? renderers - i : i);
-    order.push_back(0);
-  }
-  return order;
-}
-
 std::vector<BenchmarkBatch> BenchmarkBatches(const std::vector<Job>& jobs) {
   std::vector<BenchmarkBatch> batches;
   std::set<std::string> derivative_sources;
@@ -107,10 +93,9 @@ std::string BenchmarkKernels(const BenchmarkBatch& batch, std::size_t k) {
     auto sources = SourcesOf(job);
     return sources ? sources->test.kernel : std::string("unresolved");
   };
-  // "paired-3": each variant's frame paired with the `none` frames either
-  // side of it (ABBA order, intervals, instruction counts); costs timed the
-  // older ways are timed again.
-  return Fnv1a64Hex(kernel(batch.jobs[k]) + '\0' + kernel(batch.jobs.front()) + '\0' + "paired-3");
+  // "paired-2": the ABBA-interleaved paired ratios with intervals and
+  // instruction counts; costs timed the older way are timed again.
+  return Fnv1a64Hex(kernel(batch.jobs[k]) + '\0' + kernel(batch.jobs.front()) + '\0' + "paired-2");
 }
 
 Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, const BenchmarkOptions& bench,
@@ -136,14 +121,12 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
     if (!counted) return Prefixed("instruction counts of " + job.variant, counted.failure());
     census.push_back(*counted);
   }
-  // ms[k]: variant k's times; none_ref[k]: the geometric mean of the two
-  // `none` renders either side of it in the same repetition, its pair.
-  std::vector<std::vector<double>> ms(renderers.size()), none_ref(renderers.size());
+  std::vector<std::vector<double>> ms(renderers.size());
   const int frames = batch.jobs.front().frames;
   const int round = std::max(bench.repetitions, 2);
   auto precise = [&] {
     for (std::size_t k = 1; k < renderers.size(); ++k)
-      if (!PairedRatio(ms[k], none_ref[k]).Within(bench.precision)) return false;
+      if (!PairedRatio(ms[k], ms.front()).Within(bench.precision)) return false;
     return true;
   };
   int reps = 0;
@@ -151,17 +134,11 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
     for (int r = 0; r < round; ++r, ++reps) {
       // Frames spread over the path by the golden ratio, the same for every variant.
       const int frame = static_cast<int>(std::fmod(reps * 0.6180339887, 1.0) * frames) % std::max(frames, 1);
-      const std::vector<std::size_t> order = BenchmarkOrder(renderers.size(), reps);
-      std::vector<double> t;
-      for (std::size_t k : order) {
+      for (std::size_t i = 0; i < renderers.size(); ++i) {
+        const std::size_t k = reps % 2 ? renderers.size() - 1 - i : i;
         auto f = renderers[k]->RenderFrame(frame);
         if (!f) return Prefixed("benchmark of " + batch.jobs[k].variant, f.failure());
-        t.push_back(f->gpu_ms);
-        if (k == 0) ms[0].push_back(f->gpu_ms);
-      }
-      for (std::size_t i = 1; i + 1 < order.size(); i += 2) {
-        ms[order[i]].push_back(t[i]);
-        none_ref[order[i]].push_back(std::sqrt(t[i - 1] * t[i + 1]));
+        ms[k].push_back(f->gpu_ms);
       }
     }
   } while (reps < bench.max_repetitions && !precise());
@@ -183,7 +160,7 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
     c.min_ms = *std::min_element(ms[k].begin(), ms[k].end());
     c.max_ms = *std::max_element(ms[k].begin(), ms[k].end());
     c.none_median_ms = none_ms;
-    const RatioEstimate ratio = k == 0 ? RatioEstimate{1, 1, 1, reps} : PairedRatio(ms[k], none_ref[k]);
+    const RatioEstimate ratio = k == 0 ? RatioEstimate{1, 1, 1, reps} : PairedRatio(ms[k], ms.front());
     c.ratio_to_none = ratio.ratio;
     c.ratio_lo = ratio.lo;
     c.ratio_hi = ratio.hi;

@@ -84,7 +84,8 @@ struct Table {
   std::vector<Filter> filters, normal_map_filters;
 };
 
-const std::set<std::string> kFlags = {"widens_roughness", "ggx_only", "glints", "reads_footprint", "sg_light"};
+const std::set<std::string> kFlags = {"widens_roughness", "ggx_only",    "glints",
+                                       "reads_footprint",  "sg_light", "smooth_limit"};
 
 Filter ReadFilter(const json& e, const std::string& where, const Table& t, bool normal_map) {
   Filter f;
@@ -246,7 +247,7 @@ std::string Source(const Table& t) {
       s << (i ? ", " : "") << "{" << Quoted(f.params[i].name) << ", " << Literal(f.params[i].value) << ", "
         << Quoted(f.params[i].meaning) << "}";
     s << "},\n";
-    const char* flags[] = {"widens_roughness", "ggx_only", "glints", "reads_footprint", "sg_light"};
+    const char* flags[] = {"widens_roughness", "ggx_only", "glints", "reads_footprint", "sg_light", "smooth_limit"};
     for (std::size_t i = 0; i < std::size(flags); ++i)
       s << "       ." << flags[i] << " = " << (f.flags.count(flags[i]) ? "true" : "false")
         << (i + 1 < std::size(flags) ? ",\n" : "},\n");

@@ -72,6 +72,7 @@ std::string ExpectedVerdict(const Record& v, const Record& none) {
   const double joint = Number(v, "relmse"), joint_n = Number(none, "relmse");
   if (std::isnan(Number(v, "tv_err_lo")) || std::isnan(Number(none, "tv_err_lo"))) return "n/a (no intervals)";
   auto near = [](double a, double b) { return !std::isnan(a) && !std::isnan(b) && b != 0 && std::abs(a / b - 1) <= 0.02; };
+  if (v.count("smooth_limit") && v.at("smooth_limit") == "1") return "smooth limit (no glints)";
   if (near(tv, tv_n) && (std::isnan(joint) || near(joint, joint_n))) return "no effect";
   // Paired with `none` (same bootstrap draws): the difference's interval
   // decides, and the noise's share of it; else the rows' own intervals.
@@ -86,8 +87,12 @@ std::string ExpectedVerdict(const Record& v, const Record& none) {
     const double e_lo = Number(v, "energy_bias_lo"), e_hi = Number(v, "energy_bias_hi");
     const bool keeps = std::isnan(e_lo) ? std::abs(Number(v, "energy_bias")) <= 0.10 : e_lo <= 0.10 && e_hi >= -0.10;
     if (!keeps) return "steadier, loses energy";
-    const double sparkles = Number(v, "sparkle_count_ratio");
-    if (sparkles < 0.5 || sparkles > 2) return "steadier, loses the glints";
+    // Sparkles per frame and their lifetime within [1/2, 2] of the
+    // reference's, the count's variance within [1/4, 4]; NaN passes.
+    const double count = Number(v, "sparkle_count_ratio"), life = Number(v, "sparkle_lifetime_ratio");
+    const double variance = Number(v, "sparkle_variance_ratio");
+    if (count < 0.5 || count > 2 || life < 0.5 || life > 2 || variance < 0.25 || variance > 4)
+      return "steadier, loses the glints";
     return "better";
   }
   if (less_steady) return "less steady";

@@ -90,13 +90,35 @@ TEST(DecisionRule, AWinnerThatLosesEnergyIsNotBetter) {
 TEST(DecisionRule, AGlintFilterThatRendersNoGlintsIsNotBetter) {
   RowNumbers smooth;
   smooth.tv_err = 0.1;
-  JobResult r = Row("glint-plane", "glints:0.3", "orbit", "glints-smooth", smooth);
+  JobResult r = Row("glint-plane", "glints:0.3", "orbit", "glints-zk16", smooth);
   r.metrics["sparkles"] = {{"mean_count_ratio", 0.0}};
   EXPECT_EQ(Decide(EvidenceOf(r), Of(kNone)), Outcome::kLosesGlints);
   r.metrics["sparkles"]["mean_count_ratio"] = 2.5;  // glitter where the reference has none
   EXPECT_EQ(Decide(EvidenceOf(r), Of(kNone)), Outcome::kLosesGlints);
   r.metrics["sparkles"]["mean_count_ratio"] = 0.8;
   EXPECT_EQ(Decide(EvidenceOf(r), Of(kNone)), Outcome::kBetter);
+}
+
+// The sparkles' count variance (tolerance squared: it scales as the count's
+// square) and their lifetime weigh in too; glints-smooth, D_g itself, is the
+// smooth limit whatever its numbers.
+TEST(DecisionRule, GlintVerdictsWeighCountVarianceAndLifetimeAndNameTheSmoothLimit) {
+  RowNumbers steady;
+  steady.tv_err = 0.1;
+  JobResult r = Row("glint-plane", "glints:0.3", "orbit", "glints-zk16", steady);
+  r.metrics["sparkles"] = {{"mean_count_ratio", 0.9}, {"count_variance_ratio", 0.3}, {"lifetime_ratio", 1.1}};
+  EXPECT_EQ(Decide(EvidenceOf(r), Of(kNone)), Outcome::kBetter);  // 0.3 is inside [1/4, 4]
+  r.metrics["sparkles"]["count_variance_ratio"] = 0.2;             // the glitter's contrast is gone
+  EXPECT_EQ(Decide(EvidenceOf(r), Of(kNone)), Outcome::kLosesGlints);
+  r.metrics["sparkles"]["count_variance_ratio"] = 1.0;
+  r.metrics["sparkles"]["lifetime_ratio"] = 0.4;  // sparkles that twinkle out
+  EXPECT_EQ(Decide(EvidenceOf(r), Of(kNone)), Outcome::kLosesGlints);
+  r.metrics["sparkles"]["lifetime_ratio"] = nullptr;  // undefined: passes
+  EXPECT_EQ(Decide(EvidenceOf(r), Of(kNone)), Outcome::kBetter);
+  JobResult smooth = Row("glint-plane", "glints:0.3", "orbit", "glints-smooth", steady);
+  smooth.metrics["sparkles"] = {{"mean_count_ratio", 1.0}};
+  EXPECT_EQ(Decide(EvidenceOf(smooth), Of(kNone)), Outcome::kSmoothLimit);
+  EXPECT_EQ(OutcomeText(Outcome::kSmoothLimit), "smooth limit (no glints)");
 }
 
 TEST(DecisionRule, ATieDominatedByReferenceNoiseIsUnresolved) {

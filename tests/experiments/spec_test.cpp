@@ -479,14 +479,6 @@ TEST(Spec, PairedCostRatiosCarryAStudentTInterval) {
   EXPECT_FALSE(one.Within(0.5));
 }
 
-// Each variant's frame lies between two of `none`, its pair; odd
-// repetitions reverse the variants so that no one is always first.
-TEST(Spec, BenchmarkOrderBracketsEveryVariantWithNone) {
-  EXPECT_EQ(BenchmarkOrder(4, 0), (std::vector<std::size_t>{0, 1, 0, 2, 0, 3, 0}));
-  EXPECT_EQ(BenchmarkOrder(4, 1), (std::vector<std::size_t>{0, 3, 0, 2, 0, 1, 0}));
-  EXPECT_EQ(BenchmarkOrder(1, 0), (std::vector<std::size_t>{0}));
-}
-
 TEST(Spec, BenchmarkBatchesHoldEveryVariantOfAScenesDerivativeSourceWithNoneFirst) {
   auto r = ParseSpec(TrustSpec(""), "v.json");
   ASSERT_TRUE(r) << r.error();

@@ -128,9 +128,6 @@ struct RatioEstimate {
   bool Within(double precision) const { return n >= 2 && hi <= ratio * (1 + precision) && lo >= ratio * (1 - precision); }
 };
 RatioEstimate PairedRatio(const std::vector<double>& test_ms, const std::vector<double>& none_ms);
-// The renderers' order in one benchmark repetition: `none` (index 0) before
-// and after every variant, the variants reversed on odd repetitions (ABBA).
-std::vector<std::size_t> BenchmarkOrder(std::size_t renderers, int repetition);
 
 Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, const BenchmarkOptions& bench,
                                                 const RunOptions& options);

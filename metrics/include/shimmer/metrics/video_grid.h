@@ -67,7 +67,6 @@ class VideoGrid {
   Status Finish();
 
   const GridLayout& layout() const { return layout_; }
-  const cv::Mat& last_frame() const { return frame_; }  // as handed to the encoder (BGR)
   int frames_added() const { return frames_added_; }  // the MP4 has frames_added() * slow frames
   const char* fourcc_name() const { return fourcc_name_; }
 

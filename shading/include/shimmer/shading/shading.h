@@ -249,6 +249,7 @@ struct VariantInfo {
   bool glints = false;           // shades glint materials (glints.glsl), and only those
   bool reads_footprint = false;  // its pixels read screen-space derivatives
   bool sg_light = false;         // shades SG lights only (seed 004's warps)
+  bool smooth_limit = false;     // a glint material's limit without sparkles (D_g): never its pick
 };
 
 std::span<const VariantInfo> Variants();

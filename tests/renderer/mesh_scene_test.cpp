@@ -215,5 +215,22 @@ TEST(MeshOracle, AnalyticDerivativesAgreeWithQuadDifferences) {
   EXPECT_EQ(checked, 5);
 }
 
+// `shimmer render --asset` end to end (Vulkan): frames and sequence.json of
+// the asset alone; a bad --material is a usage error before anything renders.
+TEST(GpuRenderAsset, CliRendersAFramedAsset) {
+  TempDir dir;
+  testing::WriteSphereObj(dir.path() / "ball.obj", 2, {0, 0, 0}, 1);
+  const std::string args = "render --asset " + (dir.path() / "ball.obj").string() +
+                           " --variant tk19 --frames 2 --size 24 24 --out " + (dir.path() / "out").string();
+  const testing::CliRun r = testing::RunShimmer(SHIMMER_CLI, args);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("2 frames of ball.obj (orbit, tk19)"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(dir.path() / "out" / "sequence.json"));
+  EXPECT_TRUE(fs::exists(dir.path() / "out" / "frame_0001.exr"));
+  const testing::CliRun bad = testing::RunShimmer(SHIMMER_CLI, args + "-bad --material ggx:-1");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "out-bad"));
+}
+
 }  // namespace
 }  // namespace shimmer

@@ -125,6 +125,17 @@ TEST(SceneAssets, CliRefusesAMissingAssetWithExitTwo) {
   EXPECT_NE(both.output.find("--asset and --scene"), std::string::npos) << both.output;
 }
 
+TEST(SceneAssets, CliValidatesAMeshScene) {
+  TempDir dir;
+  testing::WriteSphereObj(dir.path() / "ball.obj", 2, {0, 0, 0}, 1);
+  const fs::path scene = testing::WriteMeshScene(dir.path(), "ball.obj");
+  const testing::CliRun v = testing::RunShimmer(SHIMMER_CLI, "scene validate " + scene.string());
+  EXPECT_EQ(v.exit_code, 0) << v.output;
+  EXPECT_NE(v.output.find("2 primitives (0 spheres, 0 capsules, 1 planes, 1 meshes of 320 triangles)"),
+            std::string::npos)
+      << v.output;
+}
+
 TEST(SceneAssets, FramingRigSeesTheWholeAsset) {
   TempDir dir;
   testing::WriteSphereObj(dir.path() / "ball.obj", 1, {3, 1, -2}, 0.5);

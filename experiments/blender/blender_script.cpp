@@ -344,6 +344,9 @@ Result<nlohmann::json> BlenderShotData(const BlenderShot& shot) {
                             "); its procedural normals are not reproduced in Blender");
         planes.push_back(p.radius);
         break;
+      case scene::Primitive::Type::kMesh:
+        return R::Failure("scene " + shot.scene.name + ": primitive " + std::to_string(index) + " is a mesh asset (" +
+                          p.mesh->file.string() + "); meshes are not exported to Blender yet");
     }
     ++index;
   }

@@ -17,6 +17,7 @@ namespace {
 
 struct RenderOptions {
   std::string scene = "sphere-field";
+  std::string asset;
   std::string material;
   std::string camera = "orbit";
   std::string variant = "none";
@@ -68,7 +69,14 @@ void Run(const RenderOptions& o, const CLI::App& cmd) {
   }
   RequireOneFilter(cmd, o.variant, o.variant_file);
   render::RenderSettings s;
-  s.scene = Take(scene::LoadScene(o.scene), {{"unknown scene", "--scene: unknown scene"}});
+  if (!o.asset.empty()) {
+    if (cmd.count("--scene") > 0) throw UsageError("--asset and --scene: give one of them");
+    s.scene = Take(scene::AssetScene(o.asset));
+    for (const std::string& w : s.scene.primitives.front().mesh->warnings)
+      std::fprintf(stderr, "shimmer: warning: %s\n", w.c_str());
+  } else {
+    s.scene = Take(scene::LoadScene(o.scene), {{"unknown scene", "--scene: unknown scene"}});
+  }
   s.material = s.scene.material;
   if (!o.material.empty()) s.material = Take(scene::ParseMaterial(o.material, s.scene.material));
   s.camera = CameraPathOption(o.camera);
@@ -138,10 +146,13 @@ void AddRenderCommand(CLI::App& app) {
       "Scenes: sphere, sphere-field, wires, bumpy-plane, sg-sphere-field, sg-plane, sg-bumpy-plane,\n"
       "  nm-plane, nm-sphere, nm-magnify (normal-mapped), glint-plane, glint-sphere (glints),\n"
       "  or a JSON file (docs/scenes.md).\n"
+      "Assets: --asset FILE (.gltf, .glb, .obj) renders a mesh alone: a directional key light, the default\n"
+      "  material (--material overrides) and the camera path about a rig that frames its bounds.\n"
       "Camera paths: orbit, pan, dolly, vr-jitter, static.\n"
       "Output: DIR/frame_NNNN.exr (R,G,B, specular.*, diffuse.*, motion.X/Y, depth.Z, normal.*,\n"
       "  roughness.A, footprint.X/Y, stderr.Y for the reference) and DIR/sequence.json.");
   cmd->add_option("--scene", o->scene, "Built-in scene name or JSON scene file")->capture_default_str();
+  cmd->add_option("--asset", o->asset, "A mesh asset (.gltf, .glb, .obj) to render alone, framed (instead of --scene)");
   cmd->add_option("--material", o->material, "Material spec (default: the scene's)");
   cmd->add_option("--camera", o->camera, "Camera path")->capture_default_str();
   cmd->add_option("--variant", o->variant, "Filter variant (`shimmer variants`) or supersample-N")

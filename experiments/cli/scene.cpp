@@ -60,12 +60,23 @@ void ValidateAsset(const std::string& file) {
 void Validate(const SceneOptions& o) {
   if (IsAssetFile(o.scene)) return ValidateAsset(o.scene);
   const scene::Scene s = Take(scene::LoadScene(o.scene));
-  int counts[3] = {0, 0, 0};
-  for (const scene::Primitive& p : s.primitives) ++counts[static_cast<int>(p.type)];
+  int counts[4] = {0, 0, 0, 0};
+  std::size_t triangles = 0;
+  for (const scene::Primitive& p : s.primitives) {
+    ++counts[static_cast<int>(p.type)];
+    if (p.mesh) {
+      triangles += p.mesh->mesh.triangle_count();
+      for (const std::string& w : p.mesh->warnings) std::fprintf(stderr, "shimmer: warning: %s\n", w.c_str());
+    }
+  }
+  // Scenes without assets print what they printed before meshes.
+  const std::string meshes = counts[3] == 0 ? std::string()
+                                            : ", " + std::to_string(counts[3]) + " meshes of " +
+                                                  std::to_string(triangles) + " triangles";
   std::printf(
-      "%s: valid scene '%s': %zu primitives (%d spheres, %d capsules, %d planes), %s light, material %s, "
+      "%s: valid scene '%s': %zu primitives (%d spheres, %d capsules, %d planes%s), %s light, material %s, "
       "camera %g from (%g, %g, %g) at %g deg elevation, fov %g deg\n",
-      o.scene.c_str(), s.name.c_str(), s.primitives.size(), counts[0], counts[1], counts[2],
+      o.scene.c_str(), s.name.c_str(), s.primitives.size(), counts[0], counts[1], counts[2], meshes.c_str(),
       std::string(shading::LightTypeName(s.light.type)).c_str(), scene::MaterialSpec(s.material).c_str(),
       s.rig.distance, s.rig.target.x, s.rig.target.y, s.rig.target.z, s.rig.elevation_deg, s.rig.fov_y_deg);
 }

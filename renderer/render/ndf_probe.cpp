@@ -8,7 +8,7 @@
 namespace shimmer::render {
 
 Result<shading::FilteredNdf<double>> ProbeNdf(const NdfProbe& probe) {
-  auto kernel = KernelSpirv("ndf_probe.comp", probe.user.get(), /*sg_light=*/false, nullptr);
+  auto kernel = KernelSpirv("ndf_probe.comp", probe.user.get(), /*sg_light=*/false, /*meshes=*/false, nullptr);
   if (!kernel) return kernel.failure();
   vk::ContextOptions options;
   options.device_name = probe.device;
@@ -50,7 +50,7 @@ Result<shading::FilteredNdf<double>> ProbeNdf(const NdfProbe& probe) {
 }
 
 Status CheckUserVariant(const shading::UserVariant& user) {
-  auto kernel = KernelSpirv("render.comp", &user, /*sg_light=*/false, nullptr);
+  auto kernel = KernelSpirv("render.comp", &user, /*sg_light=*/false, /*meshes=*/false, nullptr);
   if (!kernel) return kernel.failure();
   return Ok();
 }

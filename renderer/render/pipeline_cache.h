@@ -22,7 +22,9 @@ namespace shimmer::render {
 // A kernel of renderer/shaders (render.comp, ndf_probe.comp) compiled once
 // per process for the built-in variants (`user` null), or once per distinct
 // user variant text, each with or without the
-// SG-light integral (`sg_light`: the scene has an SG light). Compile errors
+// SG-light integral (`sg_light`: the scene has an SG light) and with or
+// without the mesh code (`meshes`: the scene has a mesh; scene.glsl's
+// SHIMMER_MESHES, so that no other kernel's SPIR-V changes). Compile errors
 // name the user's file as they gave it. `compile_ms` is set when this call
 // compiled (0 when cached).
 struct KernelModule {
@@ -30,7 +32,7 @@ struct KernelModule {
   std::string key;  // shading::CompileKey of its sources
 };
 Result<std::shared_ptr<const KernelModule>> KernelSpirv(std::string_view kernel, const shading::UserVariant* user,
-                                                        bool sg_light, double* compile_ms);
+                                                        bool sg_light, bool meshes, double* compile_ms);
 
 // shading::CanonicalSpirvHash of `kernel` specialized to `specialization`
 // (the module AcquirePipeline hands the driver), kept per process; the

@@ -34,7 +34,8 @@ Result<ResolvedKernel> KernelOf(const RenderSettings& settings) {
   auto variant = ResolveVariant(settings);
   if (!variant) return variant.failure();
   const bool sg_light = settings.scene.light.type == shading::LightType::kSg;
-  auto module = KernelSpirv("render.comp", variant->user.get(), sg_light, nullptr);
+  const bool meshes = (scene::SceneFeatures(settings.scene) & shading::kSceneMeshes) != 0;
+  auto module = KernelSpirv("render.comp", variant->user.get(), sg_light, meshes, nullptr);
   if (!module) return module.failure();
   auto specialization = KernelSpecialization(*variant, settings);
   return ResolvedKernel{std::move(*variant), std::move(*module), {specialization.begin(), specialization.end()}};
@@ -59,6 +60,11 @@ Result<RenderFingerprint> FingerprintRender(const RenderSettings& settings) {
   std::string bytes;
   const std::vector<glm::vec4> words = scene::PackScene(settings.scene);
   Append(bytes, std::span<const glm::vec4>(words));
+  // The packed words hold a mesh's geometry; its material and textures are
+  // in the asset's files, which the content hash covers. (Nothing is added
+  // for a scene without meshes: its fingerprint is what it was.)
+  for (const scene::Primitive& p : settings.scene.primitives)
+    if (p.mesh) bytes += "asset:" + p.mesh->content_hash;
   for (int i = 0; i < settings.frames; ++i) {
     Append(bytes, FrameConstantsOf(settings, i));
     Append(bytes, PushOf(*variant, settings, i));

@@ -194,7 +194,8 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
 
   // Kernel source first: a compile error is reported before touching Vulkan.
   const bool sg_light = settings.scene.light.type == shading::LightType::kSg;
-  auto spirv = KernelSpirv("render.comp", im.variant.user.get(), sg_light, &im.timings.compile_ms);
+  const bool meshes = (scene::SceneFeatures(settings.scene) & shading::kSceneMeshes) != 0;
+  auto spirv = KernelSpirv("render.comp", im.variant.user.get(), sg_light, meshes, &im.timings.compile_ms);
   if (!spirv) return spirv.failure();
 
   vk::ContextOptions options;
@@ -222,6 +223,11 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
   im.pipeline = *pipeline;
 
   im.words = scene::PackScene(settings.scene);
+  if (im.words.size() * sizeof(glm::vec4) > dev.max_storage_buffer_range)
+    return R::Failure("the scene takes " + std::to_string((im.words.size() * sizeof(glm::vec4)) >> 20) +
+                          " MiB, over the device's " + std::to_string(dev.max_storage_buffer_range >> 20) +
+                          " MiB storage buffers; use smaller assets",
+                      ErrorCode::kOutOfMemory);
   // Rows of all the layers that fit one storage buffer, in whole workgroups.
   const std::size_t row_bytes = std::size_t(settings.width) * kChannelCount * sizeof(float);
   const int fitting_rows = int(std::min<std::uint64_t>(dev.max_storage_buffer_range / row_bytes, 1 << 30)) / 8 * 8;

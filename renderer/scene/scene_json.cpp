@@ -7,6 +7,8 @@
 #include <cmath>
 #include <filesystem>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include "shimmer/core/number_text.h"
 
 namespace shimmer::scene {
@@ -153,6 +155,112 @@ void ReadNormalMap(FieldReader& r, const nlohmann::json& pj, const std::string& 
   p->normal_map_source = src;
 }
 
+// "transform": {"translate": [x, y, z], "rotate_deg": [x, y, z], "scale": s or
+// [x, y, z]} (scaled, turned about x, then y, then z, then moved), or
+// {"matrix": [16 numbers, row by row]}.
+void ReadTransform(FieldReader& r, const nlohmann::json& aj, const std::string& source, const std::string& pointer,
+                   glm::dmat4* out) {
+  if (!r.ok() || !aj.contains("transform")) return;
+  const auto& tj = aj["transform"];
+  if (!tj.is_object()) {
+    r.FailKey("transform", "must be an object with 'translate', 'rotate_deg', 'scale' or 'matrix'");
+    return;
+  }
+  FieldReader t(tj, source, pointer + "/transform");
+  t.Keys({"translate", "rotate_deg", "scale", "matrix"});
+  if (t.ok() && tj.contains("matrix")) {
+    const auto& m = tj["matrix"];
+    bool numbers = m.is_array() && m.size() == 16;
+    for (std::size_t i = 0; numbers && i < 16; ++i) numbers = m[i].is_number() && std::isfinite(m[i].get<double>());
+    if (tj.size() != 1)
+      t.Fail("'matrix' stands alone: drop 'translate', 'rotate_deg' and 'scale'");
+    else if (!numbers)
+      t.FailKey("matrix", "must be an array of 16 finite numbers, row by row");
+    else
+      for (int row = 0; row < 4; ++row)
+        for (int col = 0; col < 4; ++col) (*out)[col][row] = m[std::size_t(4 * row + col)].get<double>();
+    r.Adopt(t.error());
+    return;
+  }
+  glm::dvec3 translate{0}, rotate{0}, scale{1};
+  t.Vec3("translate", &translate).Vec3("rotate_deg", &rotate);
+  if (t.ok() && tj.contains("scale")) {
+    const auto& sj = tj["scale"];
+    if (sj.is_number())
+      scale = glm::dvec3(sj.get<double>());
+    else
+      t.Vec3("scale", &scale);
+    if (t.ok() && !(glm::all(glm::greaterThan(glm::abs(scale), glm::dvec3(1e-9))) &&
+                    glm::all(glm::lessThan(glm::abs(scale), glm::dvec3(1e6)))))
+      t.FailKey("scale", "must be a number or 3 numbers, each nonzero and below 1e6 in size");
+  }
+  if (!t.ok()) {
+    r.Adopt(t.error());
+    return;
+  }
+  glm::dmat4 m = glm::translate(glm::dmat4(1), translate);
+  m = glm::rotate(m, glm::radians(rotate.z), glm::dvec3(0, 0, 1));
+  m = glm::rotate(m, glm::radians(rotate.y), glm::dvec3(0, 1, 0));
+  m = glm::rotate(m, glm::radians(rotate.x), glm::dvec3(1, 0, 0));
+  *out = glm::scale(m, scale);
+}
+
+// "assets": [{"file": F, "transform": T, "material": M, "normal_map": N}]: mesh
+// assets (mesh_loading.h) placed beside the primitives; a relative file is
+// found beside the scene file. The kernel shades a scene with one material:
+// an asset's "material" sets it, so it may be given once, there or at the top.
+Status ReadAssets(const nlohmann::json& j, const std::string& source, Scene& s) {
+  if (!j.contains("assets")) return Ok();
+  const auto& assets = j["assets"];
+  if (!assets.is_array() || assets.empty())
+    return Status::Failure(source + ": /assets: must be a non-empty array of objects with a 'file'");
+  if (s.primitives.size() + assets.size() > kMaxPrimitives)
+    return Status::Failure(source + ": /assets: " + std::to_string(s.primitives.size() + assets.size()) +
+                           " primitives and assets; at most " + std::to_string(kMaxPrimitives) + " are supported");
+  std::string material_at = j.contains("material") ? "/material" : "";
+  std::size_t mesh_words = 0;
+  int index = 0;
+  for (const auto& aj : assets) {
+    const std::string pointer = "/assets/" + std::to_string(index++);
+    if (!aj.is_object()) return Status::Failure(source + ": " + pointer + ": must be an object with a 'file'");
+    FieldReader r(aj, source, pointer);
+    std::string file, material;
+    r.Keys({"file", "transform", "material", "normal_map"}).Require("file").String("file", &file);
+    r.String("material", &material);
+    if (r.ok() && file.empty()) r.FailKey("file", "must name a .gltf, .glb or .obj file");
+    glm::dmat4 transform(1);
+    ReadTransform(r, aj, source, pointer, &transform);
+    if (r.ok() && !material.empty() && !material_at.empty())
+      r.FailKey("material", "the scene's material is given at " + material_at +
+                                " already; a scene has one material, so give it once");
+    if (!r.ok()) return Status::Failure(r.error());
+    std::filesystem::path path(file);
+    if (path.is_relative()) path = std::filesystem::path(source).parent_path() / path;
+    auto placed = PlaceAsset(path, transform);
+    if (!placed) return Status::Failure(source + ": " + pointer + "/file: " + placed.error());
+    Primitive p;
+    p.type = Primitive::Type::kMesh;
+    p.radius = 0;
+    p.a = (*placed)->lo;
+    p.b = (*placed)->hi;
+    p.mesh = *placed;
+    ReadNormalMap(r, aj, source, pointer, &p);
+    if (!r.ok()) return Status::Failure(r.error());
+    if (!material.empty()) {
+      auto m = ParseMaterial(material, s.material);
+      if (!m) return Status::Failure(source + ": " + pointer + "/material: " + m.error());
+      s.material = *m;
+      material_at = pointer + "/material";
+    }
+    mesh_words += PackedMeshWords(*p.mesh);
+    if (mesh_words >= kMaxSceneWords)
+      return Status::Failure(source + ": /assets: the assets up to " + pointer +
+                             " take more than the kernel's 2^24 scene words; use smaller assets");
+    s.primitives.push_back(p);
+  }
+  return Ok();
+}
+
 }  // namespace
 
 Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) {
@@ -161,10 +269,13 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
   Scene s;
   s.name = source;
   FieldReader top(j, source, "");
-  top.Keys({"name", "primitives", "light", "material", "camera"}).String("name", &s.name).Require("primitives");
+  top.Keys({"name", "primitives", "assets", "light", "material", "camera"}).String("name", &s.name);
+  if (top.ok() && !j.contains("assets")) top.Require("primitives");
   if (!top.ok()) return R::Failure(top.error());
-  const auto& prims = j["primitives"];
-  if (!prims.is_array() || prims.empty()) return R::Failure(source + ": /primitives: must be a non-empty array");
+  const nlohmann::json no_primitives = nlohmann::json::array();
+  const auto& prims = j.contains("primitives") ? j["primitives"] : no_primitives;
+  if (!prims.is_array() || (prims.empty() && j.contains("primitives")))
+    return R::Failure(source + ": /primitives: must be a non-empty array");
   if (prims.size() > kMaxPrimitives)
     return R::Failure(source + ": /primitives: " + std::to_string(prims.size()) + " primitives; at most " +
                       std::to_string(kMaxPrimitives) + " are supported");
@@ -276,6 +387,7 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
         .Number("fov_y_deg", &s.rig.fov_y_deg, 1, 170);
     if (!r.ok()) return R::Failure(r.error());
   }
+  if (Status a = ReadAssets(j, source, s); !a) return a.failure();
   return s;
 }
 

@@ -24,12 +24,13 @@ Box Bounds(const Primitive& p) {
   Box b;
   glm::dvec3 r(p.radius);
   if (p.type == Primitive::Type::kSphere) return {p.a - r, p.a + r};
+  if (p.type == Primitive::Type::kMesh) return {p.a, p.b};
   b.lo = glm::min(p.a, p.b) - r;
   b.hi = glm::max(p.a, p.b) + r;
   return b;
 }
 
-struct BvhNode {
+struct PrimNode {
   Box box;
   int skip = 0;   // the node after this subtree
   int prim = -1;  // a leaf's one primitive; -1: interior
@@ -37,7 +38,7 @@ struct BvhNode {
 
 // Median split on the widest centroid axis, nodes appended in depth-first
 // order (scene.glsl walks them without a stack).
-void BuildNode(std::vector<BvhNode>& nodes, std::vector<int>& order, int begin, int end,
+void BuildNode(std::vector<PrimNode>& nodes, std::vector<int>& order, int begin, int end,
                const std::vector<Primitive>& prims) {
   const int index = static_cast<int>(nodes.size());
   nodes.emplace_back();
@@ -65,6 +66,35 @@ void BuildNode(std::vector<BvhNode>& nodes, std::vector<int>& order, int begin, 
   nodes[index].skip = static_cast<int>(nodes.size());
 }
 
+// One mesh at word `base`, its normal map's header at `map` (0: none).
+void PackMesh(const PlacedMesh& placed, int base, int map, std::vector<glm::vec4>& words) {
+  const TriangleBvh& bvh = placed.bvh;
+  const TriangleMesh& mesh = placed.mesh;
+  const int nodes = static_cast<int>(bvh.nodes().size());
+  const int triangles = static_cast<int>(bvh.triangle_order().size());
+  const int first_node = base + 1, first_triangle = first_node + 2 * nodes,
+            first_vertex = first_triangle + 3 * triangles;
+  words.push_back({float(nodes), float(first_node), float(first_triangle), float(triangles)});
+  for (const BvhNode& n : bvh.nodes()) {
+    words.push_back({n.lo.x, n.lo.y, n.lo.z, float(n.offset)});
+    words.push_back({n.hi.x, n.hi.y, n.hi.z, float(n.count)});
+  }
+  for (int j = 0; j < triangles; ++j)
+    for (int c = 0; c < 3; ++c) {
+      const glm::vec3 p = bvh.triangle_vertices()[std::size_t(3 * j + c)];
+      const std::uint32_t v = mesh.indices[3 * std::size_t(bvh.triangle_order()[std::size_t(j)]) + std::size_t(c)];
+      words.push_back({p.x, p.y, p.z, float(first_vertex + 3 * static_cast<int>(v))});
+    }
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    const glm::vec3 n = mesh.normals[v];
+    const glm::vec4 t = mesh.tangents[v];
+    const glm::vec2 uv = mesh.uv0[v];
+    words.push_back({n.x, n.y, n.z, uv.x});
+    words.push_back(t);
+    words.push_back({uv.y, float(map), 0.0f, 0.0f});
+  }
+}
+
 glm::vec4 PrimWord0(const Primitive& p) {
   return {float(static_cast<int>(p.type)), float(p.radius), float(p.bump_slope), float(p.bump_frequency)};
 }
@@ -79,6 +109,7 @@ int SceneFeatures(const Scene& scene) {
     if (p.type == Primitive::Type::kSphere) mask |= kSceneSpheres;
     if (p.type == Primitive::Type::kCapsule) mask |= kSceneCapsules;
     if (p.type == Primitive::Type::kPlane) mask |= kScenePlanes | (p.bump_slope != 0 ? kSceneBumps : 0);
+    if (p.type == Primitive::Type::kMesh) mask |= kSceneMeshes;
   }
   return mask;
 }
@@ -88,12 +119,12 @@ std::vector<glm::vec4> PackScene(const Scene& scene) {
   for (const Primitive& p : scene.primitives) (p.type == Primitive::Type::kPlane ? unbounded : bounded).push_back(p);
   std::vector<int> order(bounded.size());
   std::iota(order.begin(), order.end(), 0);
-  std::vector<BvhNode> nodes;
+  std::vector<PrimNode> nodes;
   if (!bounded.empty()) BuildNode(nodes, order, 0, static_cast<int>(bounded.size()), bounded);
   const int first_prim_word = 1 + 2 * static_cast<int>(nodes.size());
   std::vector<glm::vec4> words;
   words.push_back({float(bounded.size()), float(nodes.size()), float(first_prim_word), float(unbounded.size())});
-  for (const BvhNode& n : nodes) {
+  for (const PrimNode& n : nodes) {
     words.push_back({float(n.box.lo.x), float(n.box.lo.y), float(n.box.lo.z), float(n.skip)});
     words.push_back({float(n.box.hi.x), float(n.box.hi.y), float(n.box.hi.z), float(n.prim + 1)});  // 0: interior
   }
@@ -119,11 +150,18 @@ std::vector<glm::vec4> PackScene(const Scene& scene) {
       level_word[m].push_back(next);
       next += 3 * static_cast<int>(level.texels.size());
     }
+  // Meshes (scene.glsl's layout) after the texels.
+  std::vector<int> mesh_word(packed.size(), 0);
+  for (std::size_t k = 0; k < packed.size(); ++k)
+    if (packed[k]->mesh) {
+      mesh_word[k] = next;
+      next += static_cast<int>(PackedMeshWords(*packed[k]->mesh));
+    }
   for (std::size_t k = 0; k < packed.size(); ++k) {
     const Primitive& p = *packed[k];
     words.push_back(PrimWord0(p));
     words.push_back({float(p.a.x), float(p.a.y), float(p.a.z), float(header_word[k])});
-    words.push_back({float(p.b.x), float(p.b.y), float(p.b.z), 0.0f});
+    words.push_back({float(p.b.x), float(p.b.y), float(p.b.z), float(mesh_word[k])});
   }
   for (std::size_t k = 0; k < packed.size(); ++k) {
     const NormalMap* map = packed[k]->normal_map.get();
@@ -143,6 +181,8 @@ std::vector<glm::vec4> PackScene(const Scene& scene) {
         words.push_back({t.b.x, t.b.y, t.m.x, t.m.y});
         words.push_back({t.m.z, 0.0f, 0.0f, 0.0f});
       }
+  for (std::size_t k = 0; k < packed.size(); ++k)
+    if (packed[k]->mesh) PackMesh(*packed[k]->mesh, mesh_word[k], header_word[k], words);
   return words;
 }
 

@@ -116,6 +116,9 @@ SurfaceSample surfaceWithNormal(Prim pr, int prim, vec3 p, vec3 eye, Light light
     s.uPeriod = surfaceUPeriod(pr);
   }
   s.tangent = normalize(cross(tangentAxis(pr, s.n), s.n));
+#ifdef SHIMMER_MESHES
+  if (isTriangle(pr)) s.tangent = triangleShadingTangent(pr, p, s.n);
+#endif
   s.bitangent = cross(s.n, s.tangent);
   s.v = safeNormalize(eye - p, s.n);
   s.l = lightDirection(light, p);
@@ -269,6 +272,9 @@ vec2 hppDerivative(SurfaceSample s, Prim pr, Light light, vec3 dp, vec3 dn) {
   vec3 dh = dNormalize(hv, dv + dl);
   vec3 axis = tangentAxis(pr, s.n);
   vec3 dt = dNormalize(cross(axis, s.n), cross(axis, dn));
+#ifdef SHIMMER_MESHES
+  if (isTriangle(pr)) dt = triangleShadingTangentDeriv(pr, s.p, s.n, dp, dn);
+#endif
   vec3 db = cross(dn, s.tangent) + cross(s.n, dt);
   vec3 hl = vec3(dot(h, s.tangent), dot(h, s.bitangent), guardedZ(dot(h, s.n)));
   vec3 dhl = vec3(dot(dh, s.tangent) + dot(h, dt), dot(dh, s.bitangent) + dot(h, db), dot(dh, s.n) + dot(h, dn));

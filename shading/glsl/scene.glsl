@@ -13,13 +13,28 @@
 //                                (type, radius or height, bumpSlope, bumpFrequency), (a, map), (b, 0)
 //                                map: the word of the primitive's normal-map header (normal_map.glsl), 0: none
 // Unbounded primitives (planes) follow the BVH's primitives and are always tested.
-// Normal-map headers and texels follow the primitives.
+// Normal-map headers and texels follow the primitives, then the meshes:
+//   a mesh primitive             (PRIM_MESH, 0, 0, 0), (bbmin, map), (bbmax, its header word)
+//   mesh header                  (nodeCount, firstNodeWord, firstTriangleWord, triangleCount)
+//   node i, 2 words              (bbmin, offset), (bbmax, count): the flattened binned-SAH
+//                                BVH of triangle_bvh.h (count 0: interior, its left child
+//                                next, `offset` the right; else triangles offset.. of the leaf)
+//   triangle j, 3 words          (corner k's position, corner k's vertex word), k = 0, 1, 2
+//   vertex, 3 words              (normal, u), (tangent, handedness w), (v, map, 0, 0)
+// A ray that hits a triangle reports the triangle's first word as its primitive:
+// those words lie past every primitive's, so the number says which it is, and
+// loadPrim gives a PRIM_TRIANGLE for it. Mesh code is compiled only where the
+// includer defines SHIMMER_MESHES (the kernel of a scene with meshes, the C++
+// oracle): every other kernel's SPIR-V stays what it was, and with it the ids
+// of the results stored from it.
 // The includer provides `vec4 sceneWord(int i)` (normal_map.glsl, included
 // first, declares the empty scene of stand-alone compile checks).
 
 const int PRIM_SPHERE = 0;
 const int PRIM_CAPSULE = 1;
 const int PRIM_PLANE = 2;
+const int PRIM_MESH = 3;      // a triangle mesh with its own BVH
+const int PRIM_TRIANGLE = 4;  // one of its triangles, as a hit names it
 
 // What kinds of primitive a scene holds, a bit mask. The GPU kernel makes it a
 // specialization constant: SIMD CPU drivers (lavapipe) run both sides of every
@@ -31,8 +46,10 @@ const int SCENE_CAPSULES = 2;
 const int SCENE_PLANES = 4;
 const int SCENE_BUMPS = 8;  // planes with a normal pattern
 const int SCENE_NORMAL_MAPS = 16;  // primitives with a normal map
+const int SCENE_MESHES = 32;  // triangle meshes (with SHIMMER_MESHES)
 #ifndef SHIMMER_SCENE_FEATURES
-const int SCENE_FEATURES = SCENE_SPHERES | SCENE_CAPSULES | SCENE_PLANES | SCENE_BUMPS | SCENE_NORMAL_MAPS;
+const int SCENE_FEATURES =
+    SCENE_SPHERES | SCENE_CAPSULES | SCENE_PLANES | SCENE_BUMPS | SCENE_NORMAL_MAPS | SCENE_MESHES;
 #endif
 const real RAY_TMIN = real(1e-4);
 const real RAY_TMAX = real(1e30);
@@ -109,7 +126,38 @@ bool isMapped(Prim p) { return (SCENE_FEATURES & SCENE_NORMAL_MAPS) != 0 && p.ma
 
 int scenePrimWord(int index) { return int(sceneWord(0).z) + 3 * index; }
 
+#ifdef SHIMMER_MESHES
+bool isMesh(Prim p) { return (SCENE_FEATURES & SCENE_MESHES) != 0 && p.type == PRIM_MESH; }
+bool isTriangle(Prim p) { return (SCENE_FEATURES & SCENE_MESHES) != 0 && p.type == PRIM_TRIANGLE; }
+
+// A hit's primitive number is a triangle's word when it lies past the
+// primitives' words.
+bool isTriangleId(int index) {
+  vec4 header = sceneWord(0);
+  return (SCENE_FEATURES & SCENE_MESHES) != 0 && index >= scenePrimWord(int(header.x) + int(header.w));
+}
+
+// The triangle at `word`: `radius` keeps the word (a float holds it exactly
+// below 2^24), `a` and `b` its first corners, `map` its mesh's normal map.
+Prim loadTriangle(int word) {
+  Prim p;
+  p.type = PRIM_TRIANGLE;
+  p.radius = real(word);
+  p.bumpSlope = real(0);
+  p.bumpFreq = real(0);
+  vec4 w0 = sceneWord(word);
+  vec4 w1 = sceneWord(word + 1);
+  p.a = vec3(w0.x, w0.y, w0.z);
+  p.b = vec3(w1.x, w1.y, w1.z);
+  p.map = int(sceneWord(int(w0.w) + 2).y);
+  return p;
+}
+#endif
+
 Prim loadPrim(int index) {
+#ifdef SHIMMER_MESHES
+  if (isTriangleId(index)) return loadTriangle(index);
+#endif
   int w = scenePrimWord(index);
   vec4 w0 = sceneWord(w);
   vec4 w1 = sceneWord(w + 1);
@@ -203,6 +251,152 @@ struct Hit {
 
 real safeInverse(real x) { return real(1) / (abs(x) > real(1e-20) ? x : real(1e-20)); }
 
+#ifdef SHIMMER_MESHES
+// ---- triangle meshes ----------------------------------------------------------
+
+// The watertight ray/triangle test of Woop, Benthin and Wald 2013 ("Watertight
+// Ray/Triangle Intersection", JCGT 2(1)), as triangle_bvh.cpp runs it: the
+// ray's space sheared so that the ray runs along +z, where the three edge
+// functions decide the hit, so that a ray through a shared edge or vertex hits
+// at least one of the triangles. (The CPU's double fallback for an edge
+// function of exactly 0 is left out: a kernel has no double; the C++ oracle is
+// double throughout.)
+struct ShearedRay {
+  int kx;
+  int ky;
+  int kz;
+  vec3 s;  // Sx, Sy, Sz
+};
+
+ShearedRay shearedRay(vec3 d) {
+  vec3 a = abs(d);
+  ShearedRay r;
+  r.kz = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+  r.kx = r.kz == 2 ? 0 : r.kz + 1;
+  r.ky = r.kx == 2 ? 0 : r.kx + 1;
+  if (d[r.kz] < real(0)) {  // keeps the triangles' winding
+    int k = r.kx;
+    r.kx = r.ky;
+    r.ky = k;
+  }
+  r.s = vec3(d[r.kx] / d[r.kz], d[r.ky] / d[r.kz], real(1) / d[r.kz]);
+  return r;
+}
+
+// The triangle's t, or -1.
+real intersectTriangle(ShearedRay r, vec3 o, vec3 v0, vec3 v1, vec3 v2) {
+  vec3 a = v0 - o;
+  vec3 b = v1 - o;
+  vec3 c = v2 - o;
+  real ax = a[r.kx] - r.s.x * a[r.kz];
+  real ay = a[r.ky] - r.s.y * a[r.kz];
+  real bx = b[r.kx] - r.s.x * b[r.kz];
+  real by = b[r.ky] - r.s.y * b[r.kz];
+  real cx = c[r.kx] - r.s.x * c[r.kz];
+  real cy = c[r.ky] - r.s.y * c[r.kz];
+  real u = cx * by - cy * bx;
+  real v = ax * cy - ay * cx;
+  real w = bx * ay - by * ax;
+  if ((u < real(0) || v < real(0) || w < real(0)) && (u > real(0) || v > real(0) || w > real(0))) return real(-1);
+  real det = u + v + w;
+  if (det == real(0)) return real(-1);
+  real t = (u * (r.s.z * a[r.kz]) + v * (r.s.z * b[r.kz]) + w * (r.s.z * c[r.kz])) / det;
+  return t > RAY_TMIN ? t : real(-1);
+}
+
+struct MeshHit {
+  int word;  // the triangle's first word; -1: none
+  real t;
+};
+
+// Deeper than any BVH the build makes (triangle_bvh.cpp: at most 97 levels;
+// a scene refuses a deeper one), so a push never overflows.
+const int MESH_STACK = 100;
+
+// The slab test with the far distance widened by 1 + 2 gamma(3) (Ize 2013,
+// "Robust BVH Ray Traversal", JCGT 2(2)), as triangle_bvh.cpp does, so that
+// rounding never drops a box the ray grazes; RAY_TMAX for a miss.
+real meshBoxEntry(vec3 o, vec3 invD, vec4 lo, vec4 hi, real tmax) {
+  vec3 t0 = (vec3(lo.x, lo.y, lo.z) - o) * invD;
+  vec3 t1 = (vec3(hi.x, hi.y, hi.z) - o) * invD;
+  vec3 tn = min(t0, t1);
+  vec3 tf = max(t0, t1) * real(1.0000004);
+  real enter = max(max(tn.x, tn.y), max(tn.z, real(0)));
+  real leave = min(min(tf.x, tf.y), min(tf.z, tmax));
+  return enter <= leave ? enter : RAY_TMAX;
+}
+
+// The nearest triangle of the mesh at header word `header` with
+// RAY_TMIN < t < tmax. A stack rather than scene.glsl's stackless walk: the
+// nearer child goes first, so that hits found there cull the farther
+// subtree, which on a mesh of many triangles saves most of the boxes.
+MeshHit traceMesh(int header, vec3 o, vec3 d, real tmax) {
+  MeshHit h;
+  h.word = -1;
+  h.t = tmax;
+  vec4 hw = sceneWord(header);
+  int nodes = int(hw.x);
+  int firstNode = int(hw.y);
+  int firstTri = int(hw.z);
+  if (nodes == 0) return h;
+  ShearedRay sr = shearedRay(d);
+  vec3 invD = vec3(safeInverse(d.x), safeInverse(d.y), safeInverse(d.z));
+  int stack[MESH_STACK];
+  int sp = 0;
+  vec4 r0 = sceneWord(firstNode);
+  vec4 r1 = sceneWord(firstNode + 1);
+  int node = meshBoxEntry(o, invD, r0, r1, h.t) != RAY_TMAX ? 0 : -1;
+  while (node >= 0) {
+    vec4 n0 = sceneWord(firstNode + 2 * node);
+    vec4 n1 = sceneWord(firstNode + 2 * node + 1);
+    int offset = int(n0.w);
+    int count = int(n1.w);
+    int next = -1;
+    if (count > 0) {
+      for (int k = 0; k < count; k++) {
+        int w = firstTri + 3 * (offset + k);
+        vec4 w0 = sceneWord(w);
+        vec4 w1 = sceneWord(w + 1);
+        vec4 w2 = sceneWord(w + 2);
+        real t = intersectTriangle(sr, o, vec3(w0.x, w0.y, w0.z), vec3(w1.x, w1.y, w1.z), vec3(w2.x, w2.y, w2.z));
+        // Equal t: the lower word, so the answer does not depend on the order of the walk.
+        if (t > real(0) && (t < h.t || (t == h.t && w < h.word))) {
+          h.t = t;
+          h.word = w;
+        }
+      }
+    } else {
+      int left = node + 1;
+      vec4 l0 = sceneWord(firstNode + 2 * left);
+      vec4 l1 = sceneWord(firstNode + 2 * left + 1);
+      vec4 q0 = sceneWord(firstNode + 2 * offset);
+      vec4 q1 = sceneWord(firstNode + 2 * offset + 1);
+      real tl = meshBoxEntry(o, invD, l0, l1, h.t);
+      real tr = meshBoxEntry(o, invD, q0, q1, h.t);
+      if (tl != RAY_TMAX && tr != RAY_TMAX) {
+        next = tl <= tr ? left : offset;
+        stack[sp] = tl <= tr ? offset : left;
+        sp++;
+      } else if (tl != RAY_TMAX) {
+        next = left;
+      } else if (tr != RAY_TMAX) {
+        next = offset;
+      }
+    }
+    if (next < 0 && sp > 0) {
+      sp--;
+      next = stack[sp];
+    }
+    node = next;
+  }
+  return h;
+}
+
+// Header word of mesh primitive `index`.
+int meshHeaderOf(int index) { return int(sceneWord(scenePrimWord(index) + 2).w); }
+
+#endif
+
 Hit traceScene(vec3 o, vec3 d) {
   Hit hit;
   hit.prim = -1;
@@ -235,6 +429,15 @@ Hit traceScene(vec3 o, vec3 d) {
         hit.t = t;
         hit.prim = prim;
       }
+#ifdef SHIMMER_MESHES
+      if (isMesh(loadPrim(prim))) {
+        MeshHit m = traceMesh(meshHeaderOf(prim), o, d, hit.t);
+        if (m.word >= 0) {
+          hit.t = m.t;
+          hit.prim = m.word;
+        }
+      }
+#endif
     }
     node = inBox && prim < 0 ? node + 1 : int(n0.w);
   }
@@ -353,6 +556,10 @@ PixelCandidates pixelCandidates(PixelCone k) {
     bool inCone = coneTouchesSphere(k, (lo + hi) * real(0.5), length(hi - lo) * real(0.5));
     int prim = int(n1.w) - 1;
     if (inCone && prim >= 0 && coneTouchesPrim(k, loadPrim(prim))) l = withCandidate(l, prim);
+#ifdef SHIMMER_MESHES
+    // A mesh is no candidate (its hits are triangles): the pixel's samples walk the BVH.
+    if (inCone && prim >= 0 && isMesh(loadPrim(prim))) l.count = l.count + PIXEL_CANDIDATES + 1;
+#endif
     node = inCone && prim < 0 ? node + 1 : int(n0.w);
   }
   l.p0 = loadPrim(max(l.id0, 0));
@@ -397,6 +604,117 @@ Hit traceCandidates(PixelCandidates l, vec3 o, vec3 d) {
 
 // ---- surface attributes -----------------------------------------------------
 
+#ifdef SHIMMER_MESHES
+// ---- triangle attributes --------------------------------------------------------
+// A point q of a triangle's plane (or off it: a neighbour pixel's ray continued
+// onto the plane past the edge) has barycentrics (b0, b1, b2) that interpolate
+// the corners' attributes linearly, past the edges too, as a rasterizer's
+// helper lanes extrapolate them.
+
+struct TriangleCorners {
+  vec3 p0;
+  vec3 p1;
+  vec3 p2;
+  int v0;  // vertex words
+  int v1;
+  int v2;
+};
+
+TriangleCorners triangleCorners(Prim p) {
+  int w = int(p.radius);
+  vec4 w0 = sceneWord(w);
+  vec4 w1 = sceneWord(w + 1);
+  vec4 w2 = sceneWord(w + 2);
+  TriangleCorners c;
+  c.p0 = vec3(w0.x, w0.y, w0.z);
+  c.p1 = vec3(w1.x, w1.y, w1.z);
+  c.p2 = vec3(w2.x, w2.y, w2.z);
+  c.v0 = int(w0.w);
+  c.v1 = int(w1.w);
+  c.v2 = int(w2.w);
+  return c;
+}
+
+// The gradients of b1 and b2 in the plane (b0's is minus their sum): the
+// barycentrics of q are b1 = g1.(q - p0), b2 = g2.(q - p0).
+struct BarycentricGradient {
+  vec3 g1;
+  vec3 g2;
+};
+
+BarycentricGradient barycentricGradient(TriangleCorners c) {
+  vec3 e1 = c.p1 - c.p0;
+  vec3 e2 = c.p2 - c.p0;
+  real d00 = dot(e1, e1);
+  real d01 = dot(e1, e2);
+  real d11 = dot(e2, e2);
+  real inv = real(1) / (d00 * d11 - d01 * d01);
+  BarycentricGradient g;
+  g.g1 = (e1 * d11 - e2 * d01) * inv;
+  g.g2 = (e2 * d00 - e1 * d01) * inv;
+  return g;
+}
+
+vec3 barycentricsAt(TriangleCorners c, vec3 q) {
+  BarycentricGradient g = barycentricGradient(c);
+  real b1 = dot(g.g1, q - c.p0);
+  real b2 = dot(g.g2, q - c.p0);
+  return vec3(real(1) - b1 - b2, b1, b2);
+}
+
+// Their change for a move dq.
+vec3 barycentricChange(TriangleCorners c, vec3 dq) {
+  BarycentricGradient g = barycentricGradient(c);
+  real b1 = dot(g.g1, dq);
+  real b2 = dot(g.g2, dq);
+  return vec3(-b1 - b2, b1, b2);
+}
+
+vec3 vertexNormal(int v) {
+  vec4 w = sceneWord(v);
+  return vec3(w.x, w.y, w.z);
+}
+vec4 vertexTangent(int v) { return sceneWord(v + 1); }
+vec2 vertexUv(int v) { return vec2(sceneWord(v).w, sceneWord(v + 2).x); }
+
+vec3 interpolate3(vec3 b, vec3 x0, vec3 x1, vec3 x2) { return x0 * b.x + x1 * b.y + x2 * b.z; }
+
+// The interpolated vertex normal before normalisation.
+vec3 triangleNormalSum(TriangleCorners c, vec3 b) {
+  return interpolate3(b, vertexNormal(c.v0), vertexNormal(c.v1), vertexNormal(c.v2));
+}
+
+// The face normal turned to the side the vertex normals point to: the side
+// the mesh faces (triangle_mesh.h's convention).
+vec3 triangleGeometricNormal(TriangleCorners c) {
+  vec3 f = cross(c.p1 - c.p0, c.p2 - c.p0);
+  vec3 s = vertexNormal(c.v0) + vertexNormal(c.v1) + vertexNormal(c.v2);
+  return dot(f, s) < real(0) ? -f : f;
+}
+
+vec3 triangleShadingNormal(Prim p, vec3 q) {
+  TriangleCorners c = triangleCorners(p);
+  return safeNormalize(triangleNormalSum(c, barycentricsAt(c, q)), safeNormalize(triangleGeometricNormal(c), vec3(real(0), real(1), real(0))));
+}
+
+// d(interpolated unit normal) for a move dq: the derivative of
+// normalize(sum b_i n_i), with db linear in dq.
+vec3 triangleShadingNormalDeriv(Prim p, vec3 q, vec3 dq) {
+  TriangleCorners c = triangleCorners(p);
+  vec3 n = triangleNormalSum(c, barycentricsAt(c, q));
+  vec3 dn = triangleNormalSum(c, barycentricChange(c, dq));
+  return dNormalize(n, dn);
+}
+
+vec2 triangleUv(Prim p, vec3 q) {
+  TriangleCorners c = triangleCorners(p);
+  vec3 b = barycentricsAt(c, q);
+  return vertexUv(c.v0) * b.x + vertexUv(c.v1) * b.y + vertexUv(c.v2) * b.z;
+}
+
+#endif
+
+
 // The normal pattern of a bumpy plane: three sine waves of height
 // (bumpSlope / w) sin(w k.q + phase), so that each contributes slopes up to
 // bumpSlope. Returns the height gradient (dh/dx, dh/dz).
@@ -436,6 +754,9 @@ vec3 capsuleAxisPoint(Prim p, vec3 q) {
 // The unnormalised geometric normal of p's surface continued through q, q
 // anywhere (helper-lane extrapolation evaluates points off the surface).
 vec3 geometricNormalDir(Prim p, vec3 q) {
+#ifdef SHIMMER_MESHES
+  if (isTriangle(p)) return triangleGeometricNormal(triangleCorners(p));
+#endif
   if (isSphere(p)) return q - p.a;
   if (isCapsule(p)) return q - capsuleAxisPoint(p, q);
   return vec3(real(0), real(1), real(0));
@@ -483,7 +804,67 @@ struct GeometricFrame {
   vec3 n;
 };
 
+#ifdef SHIMMER_MESHES
+// The interpolated tangent (xyz) and the first corner's handedness (w).
+vec4 triangleTangentSum(TriangleCorners c, vec3 b) {
+  vec4 t0 = vertexTangent(c.v0);
+  vec3 t = interpolate3(b, vec3(t0.x, t0.y, t0.z), vec3(vertexTangent(c.v1).x, vertexTangent(c.v1).y, vertexTangent(c.v1).z),
+                        vec3(vertexTangent(c.v2).x, vertexTangent(c.v2).y, vertexTangent(c.v2).z));
+  return vec4(t.x, t.y, t.z, t0.w < real(0) ? real(-1) : real(1));
+}
+
+// The interpolated tangent made orthogonal to n (Gram-Schmidt), unnormalised;
+// zero when the mesh has no tangents (no uv) or it runs along n.
+vec3 tangentAgainst(vec3 t, vec3 n) { return t - n * dot(n, t); }
+
+bool usableTangent(vec3 tp) { return dot(tp, tp) > real(1e-12); }
+
+// The shading frame's tangent at q with unit normal n: the mesh's tangent
+// where it has one, else the analytic default about +y (tangentAxis).
+vec3 triangleShadingTangent(Prim p, vec3 q, vec3 n) {
+  TriangleCorners c = triangleCorners(p);
+  vec4 ts = triangleTangentSum(c, barycentricsAt(c, q));
+  vec3 tp = tangentAgainst(vec3(ts.x, ts.y, ts.z), n);
+  if (usableTangent(tp)) return normalize(tp);
+  return normalize(cross(tangentAxis(p, n), n));
+}
+
+// Its change for a move dq with normal change dn.
+vec3 triangleShadingTangentDeriv(Prim p, vec3 q, vec3 n, vec3 dq, vec3 dn) {
+  TriangleCorners c = triangleCorners(p);
+  vec4 ts = triangleTangentSum(c, barycentricsAt(c, q));
+  vec3 t = vec3(ts.x, ts.y, ts.z);
+  vec3 tp = tangentAgainst(t, n);
+  if (!usableTangent(tp)) {
+    vec3 axis = tangentAxis(p, n);
+    return dNormalize(cross(axis, n), cross(axis, dn));
+  }
+  vec4 dts = triangleTangentSum(c, barycentricChange(c, dq));
+  vec3 dt = vec3(dts.x, dts.y, dts.z);
+  return dNormalize(tp, dt - dn * dot(n, t) - n * (dot(dn, t) + dot(n, dt)));
+}
+
+// The frame a tangent-space normal map is read in: the interpolated normal,
+// the tangent along +u, and the bitangent along +v. glTF's bitangent
+// w cross(N, T) points toward -v (triangle_mesh.h), so +v is its opposite.
+GeometricFrame triangleMapFrame(Prim p, vec3 q) {
+  TriangleCorners c = triangleCorners(p);
+  vec3 b = barycentricsAt(c, q);
+  GeometricFrame f;
+  f.n = safeNormalize(triangleNormalSum(c, b), safeNormalize(triangleGeometricNormal(c), vec3(real(0), real(1), real(0))));
+  vec4 ts = triangleTangentSum(c, b);
+  vec3 tp = tangentAgainst(vec3(ts.x, ts.y, ts.z), f.n);
+  f.t = usableTangent(tp) ? normalize(tp) : normalize(cross(tangentAxis(p, f.n), f.n));
+  f.b = cross(f.n, f.t) * (-ts.w);
+  return f;
+}
+
+#endif
+
 GeometricFrame geometricFrame(Prim p, vec3 q) {
+#ifdef SHIMMER_MESHES
+  if (isTriangle(p)) return triangleMapFrame(p, q);
+#endif
   GeometricFrame f;
   f.n = geometricNormalAt(p, q);
   f.t = normalize(cross(tangentAxis(p, f.n), f.n));
@@ -498,6 +879,9 @@ vec3 capsuleZeroDirection(vec3 u) {
 }
 
 vec2 surfaceUv(Prim p, vec3 q) {
+#ifdef SHIMMER_MESHES
+  if (isTriangle(p)) return triangleUv(p, q);
+#endif
   if (isSphere(p)) {
     vec3 d = safeNormalize(q - p.a, vec3(real(0), real(1), real(0)));
     return vec2(atan(-d.z, d.x) / (real(2) * PI), real(1) - acos(clamp(d.y, real(-1), real(1))) / PI);
@@ -523,7 +907,25 @@ struct UvGradient {
   vec3 dv;
 };
 
+#ifdef SHIMMER_MESHES
+// d uv / d q in the plane: u and v are linear in the barycentrics.
+UvGradient triangleUvGradient(Prim p) {
+  TriangleCorners c = triangleCorners(p);
+  BarycentricGradient g = barycentricGradient(c);
+  vec2 uv0 = vertexUv(c.v0);
+  vec2 d1 = vertexUv(c.v1) - uv0;
+  vec2 d2 = vertexUv(c.v2) - uv0;
+  UvGradient o;
+  o.du = g.g1 * d1.x + g.g2 * d2.x;
+  o.dv = g.g1 * d1.y + g.g2 * d2.y;
+  return o;
+}
+#endif
+
 UvGradient surfaceUvGradient(Prim p, vec3 q) {
+#ifdef SHIMMER_MESHES
+  if (isTriangle(p)) return triangleUvGradient(p);
+#endif
   GeometricFrame f = geometricFrame(p, q);
   UvGradient g;
   g.du = f.t;
@@ -551,6 +953,9 @@ vec3 mappedNormal(Prim p, vec3 q, vec3 tn) {
 // or its normal map read by filter nf.
 vec3 shadingNormalFiltered(Prim p, vec3 q, NormalMapFilter nf) {
   if (isMapped(p)) return mappedNormal(p, q, normalMapNormal(nf.mode, normalMapStats(p.map, nf, surfaceUv(p, q))));
+#ifdef SHIMMER_MESHES
+  if (isTriangle(p)) return triangleShadingNormal(p, q);
+#endif
   if (!isBumpy(p)) return geometricNormalAt(p, q);
   vec2 g = bumpGradient(p, q);
   return normalize(vec3(-g.x, real(1), -g.y));
@@ -564,6 +969,9 @@ vec3 shadingNormalDerivFiltered(Prim p, vec3 q, vec3 dq, NormalMapFilter nf) {
     vec3 h = dq * real(0.5);
     return shadingNormalFiltered(p, q + h, nf) - shadingNormalFiltered(p, q - h, nf);
   }
+#ifdef SHIMMER_MESHES
+  if (isTriangle(p)) return triangleShadingNormalDeriv(p, q, dq);
+#endif
   if (!isBumpy(p)) return geometricNormalDeriv(p, q, dq);
   vec2 g = bumpGradient(p, q);
   vec2 dg = bumpGradientDeriv(p, q, dq);

@@ -15,6 +15,7 @@ thread_local int g_scene_features = kAllSceneFeatures;
 
 #define SHIMMER_SCENE_WORDS
 #define SHIMMER_SCENE_FEATURES
+#define SHIMMER_MESHES  // the oracle traces every kind; SCENE_FEATURES picks
 #define SCENE_FEATURES g_scene_features
 namespace glsl_f32 {
 using real = float;
@@ -50,7 +51,7 @@ static_assert(kNormalMapFilterStride == glsl_f32::NMF_STRIDE);
 static_assert(int(LightType::kSg) == glsl_f32::LIGHT_SG && int(LightType::kSphere) == glsl_f32::LIGHT_SPHERE);
 static_assert(kSceneSpheres == glsl_f32::SCENE_SPHERES && kSceneCapsules == glsl_f32::SCENE_CAPSULES &&
               kScenePlanes == glsl_f32::SCENE_PLANES && kSceneBumps == glsl_f32::SCENE_BUMPS &&
-              kSceneNormalMaps == glsl_f32::SCENE_NORMAL_MAPS);
+              kSceneNormalMaps == glsl_f32::SCENE_NORMAL_MAPS && kSceneMeshes == glsl_f32::SCENE_MESHES);
 
 namespace {
 

@@ -4,6 +4,7 @@
 
 #include <glm/glm.hpp>
 
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <span>
@@ -15,12 +16,39 @@
 
 #include "shimmer/core/result.h"
 #include "shimmer/renderer/normal_map.h"
+#include "shimmer/renderer/triangle_bvh.h"
 #include "shimmer/shading/shading.h"
 
 namespace shimmer::scene {
 
+// A mesh asset placed in a scene (PlaceAsset): its meshes merged into one in
+// world space, with the BVH the kernel walks (scene.glsl, "Meshes").
+struct PlacedMesh {
+  std::filesystem::path file;
+  std::string content_hash;  // AssetContentHash: a job's id hashes it (FingerprintRender)
+  glm::dmat4 transform{1};
+  TriangleMesh mesh;  // its material is the first mesh's
+  TriangleBvh bvh;
+  glm::dvec3 lo{0}, hi{0};  // bounds
+  std::vector<std::string> warnings;  // the loader's
+};
+
+// The kernel's word indices are floats, exact below 2^24; its BVH stack
+// (scene.glsl MESH_STACK) holds this many levels.
+inline constexpr std::size_t kMaxSceneWords = std::size_t(1) << 24;
+inline constexpr int kMaxMeshBvhDepth = 100;
+
+// `file` loaded, moved by `transform` (meshes, normals and tangents), merged
+// and its BVH built; kept per process by the asset's content hash and the
+// transform. Errors name the file: the loader's, a singular transform, an
+// asset of zero-area triangles only, one too large for the kernel's words.
+Result<std::shared_ptr<const PlacedMesh>> PlaceAsset(const std::filesystem::path& file, const glm::dmat4& transform);
+// The words PackScene writes for the mesh.
+std::size_t PackedMeshWords(const PlacedMesh& mesh);
+
 struct Primitive {
-  enum class Type { kSphere = 0, kCapsule = 1, kPlane = 2 };
+  // kMesh: a placed asset; a and b hold its bounds.
+  enum class Type { kSphere = 0, kCapsule = 1, kPlane = 2, kMesh = 3 };
   Type type = Type::kSphere;
   glm::dvec3 a{0};    // sphere centre, capsule end
   glm::dvec3 b{0};    // capsule end
@@ -32,6 +60,7 @@ struct Primitive {
   std::shared_ptr<const NormalMap> normal_map;
   NormalMapSource normal_map_source;
   glm::dvec2 normal_map_scale{1, 1};
+  std::shared_ptr<const PlacedMesh> mesh;  // kMesh
 };
 
 // Where the camera paths start: looking at `target` from `distance`, at
@@ -59,6 +88,15 @@ inline constexpr double kMaxCoordinate = 1e6;
 // An SG light's sharpness: beyond it the lobe is narrower than float's
 // angular resolution near the axis (1 - cos below 1e-7).
 inline constexpr double kMaxSgSharpness = 1e6;
+
+// A scene of one asset for `shimmer render --asset`: the asset as it is,
+// lit by a directional key light from above and in front, the default
+// material, and a rig that frames it (FramingRig of the sphere about its
+// bounds' centre through its farthest vertex).
+Result<Scene> AssetScene(const std::filesystem::path& file);
+// Looking at `centre` from 20 degrees above and 30 around, far enough that
+// the sphere of `radius` about it fills 90 % of the vertical field of view.
+CameraRig FramingRig(glm::dvec3 centre, double radius, double fov_y_deg);
 
 std::vector<std::string_view> BuiltinSceneNames();
 // A built-in name, or else a path to a JSON scene file. Errors name the file

@@ -190,7 +190,9 @@ inline constexpr int kSceneCapsules = 2;
 inline constexpr int kScenePlanes = 4;
 inline constexpr int kSceneBumps = 8;  // planes with a normal pattern
 inline constexpr int kSceneNormalMaps = 16;
-inline constexpr int kAllSceneFeatures = kSceneSpheres | kSceneCapsules | kScenePlanes | kSceneBumps | kSceneNormalMaps;
+inline constexpr int kSceneMeshes = 32;
+inline constexpr int kAllSceneFeatures =
+    kSceneSpheres | kSceneCapsules | kScenePlanes | kSceneBumps | kSceneNormalMaps | kSceneMeshes;
 // --- Normal maps (normal_map.glsl, scene.glsl), in double ---------------------
 
 // Primitive `prim`'s uv at point p, its geometric tangent frame (t, b, n)

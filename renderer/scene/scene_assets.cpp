@@ -1,0 +1,139 @@
+// Mesh assets placed in scenes: a file loaded (mesh_loading.h), moved by its
+// transform, its meshes merged into one with one BVH (triangle_bvh.h), and
+// the result kept per process by the asset's content and the transform, so
+// that the jobs of a spec load and build each placement once.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <mutex>
+
+#include "shimmer/core/content_hash.h"
+#include "shimmer/renderer/mesh_loading.h"
+#include "shimmer/renderer/scene.h"
+
+namespace shimmer::scene {
+
+namespace {
+
+struct PlacementCache {
+  std::mutex mutex;
+  std::map<std::string, std::shared_ptr<const PlacedMesh>> placed;
+};
+PlacementCache& Placements() {
+  static auto* cache = new PlacementCache;  // leaked: scenes are loaded until exit
+  return *cache;
+}
+
+std::string TransformKey(const glm::dmat4& m) {
+  std::string bytes(sizeof m, '\0');
+  std::memcpy(bytes.data(), &m, sizeof m);
+  return Fnv1a64Hex(bytes);
+}
+
+// The meshes of `asset` in one, each moved by `transform` first (a mesh
+// without uv or tangents gets zero ones: the kernel then takes its default
+// tangent).
+Result<TriangleMesh> Merged(const MeshAsset& asset, const glm::dmat4& transform) {
+  TriangleMesh all;
+  all.name = asset.file.string();
+  for (TriangleMesh mesh : asset.meshes) {
+    if (!TransformMesh(transform, mesh))
+      return Result<TriangleMesh>::Failure(asset.file.string() + ": the transform is singular or not finite");
+    const auto base = static_cast<std::uint32_t>(all.positions.size());
+    const std::size_t n = mesh.positions.size();
+    all.positions.insert(all.positions.end(), mesh.positions.begin(), mesh.positions.end());
+    all.normals.insert(all.normals.end(), mesh.normals.begin(), mesh.normals.end());
+    if (mesh.tangents.size() == n)
+      all.tangents.insert(all.tangents.end(), mesh.tangents.begin(), mesh.tangents.end());
+    else
+      all.tangents.resize(all.tangents.size() + n, glm::vec4(0, 0, 0, 1));
+    if (mesh.uv0.size() == n)
+      all.uv0.insert(all.uv0.end(), mesh.uv0.begin(), mesh.uv0.end());
+    else
+      all.uv0.resize(all.uv0.size() + n, glm::vec2(0));
+    for (std::uint32_t i : mesh.indices) all.indices.push_back(base + i);
+  }
+  if (!asset.meshes.empty()) all.material = asset.meshes.front().material;
+  return all;
+}
+
+}  // namespace
+
+std::size_t PackedMeshWords(const PlacedMesh& mesh) {
+  return 1 + 2 * mesh.bvh.nodes().size() + 3 * mesh.bvh.triangle_order().size() + 3 * mesh.mesh.positions.size();
+}
+
+Result<std::shared_ptr<const PlacedMesh>> PlaceAsset(const std::filesystem::path& file, const glm::dmat4& transform) {
+  using R = Result<std::shared_ptr<const PlacedMesh>>;
+  auto hash = AssetContentHash(file);
+  if (!hash) return hash.failure();
+  const std::string key = *hash + ":" + TransformKey(transform);
+  PlacementCache& cache = Placements();
+  {
+    std::lock_guard lock(cache.mutex);
+    if (auto it = cache.placed.find(key); it != cache.placed.end()) return it->second;
+  }
+  auto asset = LoadMeshAsset(file);
+  if (!asset) return asset.failure();
+  auto merged = Merged(*asset, transform);
+  if (!merged) return merged.failure();
+  auto bvh = TriangleBvh::Build(*merged);
+  if (!bvh) return R::Failure(file.string() + ": " + bvh.error());
+  if (bvh->nodes().empty()) return R::Failure(file.string() + ": every triangle has zero area; nothing to render");
+  if (bvh->depth() + 1 >= kMaxMeshBvhDepth)
+    return R::Failure(file.string() + ": its BVH is " + std::to_string(bvh->depth() + 1) + " levels deep; the kernel walks at most " +
+                      std::to_string(kMaxMeshBvhDepth - 1));
+  auto placed = std::make_shared<PlacedMesh>();
+  placed->file = file;
+  placed->content_hash = asset->content_hash;
+  placed->transform = transform;
+  placed->warnings = asset->warnings;
+  placed->mesh = std::move(*merged);
+  placed->bvh = std::move(*bvh);
+  const glm::vec3 lo = placed->bvh.nodes().front().lo, hi = placed->bvh.nodes().front().hi;
+  placed->lo = lo;
+  placed->hi = hi;
+  if (glm::length(placed->lo) > kMaxCoordinate || glm::length(placed->hi) > kMaxCoordinate)
+    return R::Failure(file.string() + ": placed, its bounds reach past 1e6 from the origin");
+  if (PackedMeshWords(*placed) >= kMaxSceneWords)
+    return R::Failure(file.string() + ": " + std::to_string(placed->mesh.triangle_count()) + " triangles and " +
+                      std::to_string(placed->mesh.positions.size()) +
+                      " vertices take more than the kernel's 2^24 scene words; use a smaller asset");
+  std::lock_guard lock(cache.mutex);
+  return cache.placed.emplace(key, std::move(placed)).first->second;
+}
+
+CameraRig FramingRig(glm::dvec3 centre, double radius, double fov_y_deg) {
+  constexpr double kPi = 3.14159265358979323846;
+  CameraRig rig;
+  rig.target = centre;
+  rig.fov_y_deg = fov_y_deg;
+  rig.elevation_deg = 20;
+  rig.azimuth_deg = 30;
+  rig.distance = std::max(radius, 1e-6) / (0.9 * std::sin(fov_y_deg * kPi / 360));
+  return rig;
+}
+
+Result<Scene> AssetScene(const std::filesystem::path& file) {
+  auto placed = PlaceAsset(file, glm::dmat4(1));
+  if (!placed) return placed.failure();
+  Scene s;
+  s.name = file.filename().string();
+  Primitive p;
+  p.type = Primitive::Type::kMesh;
+  p.radius = 0;
+  p.a = (*placed)->lo;
+  p.b = (*placed)->hi;
+  p.mesh = *placed;
+  s.primitives.push_back(p);
+  s.light.type = shading::LightType::kDirectional;
+  s.light.vec = glm::normalize(glm::dvec3(0.4, 0.8, 0.45));
+  const glm::dvec3 centre = (p.a + p.b) * 0.5;
+  double radius = 0;
+  for (const glm::vec3& v : (*placed)->mesh.positions) radius = std::max(radius, glm::length(glm::dvec3(v) - centre));
+  s.rig = FramingRig(centre, radius, s.rig.fov_y_deg);
+  return s;
+}
+
+}  // namespace shimmer::scene

@@ -439,6 +439,105 @@ Status GiveSceneTraits(ResultStore& store, const Job& job, const std::string& id
   return Ok();
 }
 
+// The state the workers of one run share; `mutex` guards the store, the
+// summary and the progress.
+struct JobWorkers {
+  const std::vector<Job>& jobs;
+  const RunOptions& options;
+  ResultStore& store;
+  RunSummary& summary;
+  RunProgress& progress;
+  std::map<std::string, std::mutex>& reference_locks;
+  int to_compute = 0;
+  std::chrono::steady_clock::time_point start;
+  // The workers' own state, made here (not by the aggregate initialiser).
+  std::mutex mutex{};
+  double computed_s = 0;
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> failed{false};
+
+  // The first failure ends the run; the others are dropped.
+  void Stop(const std::string& job, const Error& e) {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!failed.exchange(true)) summary.error = Prefixed(job, e);
+  }
+
+  // Renders and measures the job (its reference first, one worker per
+  // reference) and stores its row; the seconds it took.
+  Result<double> Compute(const Job& job) {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (!job.external) {
+      std::lock_guard<std::mutex> lock(reference_locks.at(ReferenceId(job)));
+      if (Status reference = EnsureReference(job, options); !reference) return reference.failure();
+    }
+    auto measured = MeasureJob(job, options);
+    if (!measured) return measured.failure();
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (Status inserted = store.Insert(*measured); !inserted) return inserted.failure();
+    }
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+
+  void Count(bool done, double seconds, const std::string& what) {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (done)
+      ++summary.skipped;
+    else
+      ++summary.computed, computed_s += seconds;
+    ++progress.done;
+    progress.skipped = summary.skipped;
+    progress.current = what;
+    progress.elapsed_s = SecondsSince(start);
+    const int workers = std::max(1, options.jobs);
+    progress.eta_s =
+        summary.computed ? computed_s / summary.computed * std::max(0, to_compute - summary.computed) / workers : 0;
+    if (options.progress) options.progress(progress);
+  }
+
+  void Work() {
+    for (std::size_t k = next++; k < jobs.size() && !failed; k = next++) {
+      const Job& job = jobs[k];
+      const std::string id = JobId(job);
+      const std::string what = job.scene + " " + job.material + " " + job.camera + " " + job.variant;
+      const std::string who = "job " + id + " (" + what + ")";
+      Result<bool> done = false;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        done = store.Has(id);
+        // A row stored before scene traits were kept gets them: the report
+        // classes shots from the store, not from scene files.
+        if (done && *done && !job.external)
+          if (Status given = GiveSceneTraits(store, job, id, &summary.traits_added); !given) done = given.failure();
+      }
+      if (!done) return Stop(who, done.failure());
+      double seconds = 0;
+      if (!*done) {
+        auto computed = Compute(job);
+        if (!computed) return Stop(who, computed.failure());
+        seconds = *computed;
+      }
+      Count(*done, seconds, what);
+    }
+  }
+};
+
+// The run's store, created if missing; a store this call created is removed
+// again when it cannot be opened.
+Result<std::unique_ptr<ResultStore>> OpenRunStore(const RunOptions& options, StoreLock& lock, bool* existed) {
+  std::error_code exists_ec;
+  *existed = fs::exists(options.db_path, exists_ec);
+  auto opened = ResultStore::Open(options.db_path);
+  if (!opened) {
+    std::error_code ec;
+    if (!*existed)
+      for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(options.db_path + suffix, ec);
+    lock.Discard();
+    return opened.failure();
+  }
+  return std::move(*opened);
+}
+
 }  // namespace
 
 RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) {
@@ -455,14 +554,9 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
     summary.error = lock.failure();
     return summary;
   }
-  std::error_code exists_ec;
-  const bool store_existed = fs::exists(options.db_path, exists_ec);
-  auto opened = ResultStore::Open(options.db_path);
+  bool store_existed = false;
+  auto opened = OpenRunStore(options, **lock, &store_existed);
   if (!opened) {
-    std::error_code ec;
-    if (!store_existed)
-      for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(options.db_path + suffix, ec);
-    (*lock)->Discard();
     summary.error = opened.failure();
     return summary;
   }
@@ -471,88 +565,21 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
   std::map<std::string, std::mutex> reference_locks;
   for (const Job& job : jobs)
     if (!job.external) reference_locks[ReferenceId(job)];
-
   // The ETA counts the jobs left to compute, not those the store has.
   const auto counted = JobsToCompute(jobs, *store);
   if (!counted) {
     summary.error = counted.failure();
     return summary;
   }
-  const int to_compute = *counted;
-
-  const auto start = std::chrono::steady_clock::now();
-  std::mutex mutex;  // guards the store, the summary and the progress
   RunProgress progress;
   progress.total = summary.total;
-  double computed_s = 0;
-  std::atomic<std::size_t> next{0};
-  std::atomic<bool> failed{false};
-
-  auto worker = [&] {
-    for (std::size_t k = next++; k < jobs.size() && !failed; k = next++) {
-      const Job& job = jobs[k];
-      const std::string id = JobId(job);
-      const std::string what = job.scene + " " + job.material + " " + job.camera + " " + job.variant;
-      Result<bool> done = false;
-      {
-        std::lock_guard<std::mutex> lock(mutex);
-        done = store->Has(id);
-      }
-      auto stop = [&](const Error& e) {
-        std::lock_guard<std::mutex> lock(mutex);
-        if (!failed.exchange(true)) summary.error = Prefixed("job " + id + " (" + what + ")", e);
-      };
-      if (!done) return stop(done.failure());
-      if (*done && !job.external) {
-        // A row stored before scene traits were kept gets them: the report
-        // classes shots from the store, not from scene files.
-        Status given = Ok();
-        {
-          std::lock_guard<std::mutex> lock(mutex);
-          given = GiveSceneTraits(*store, job, id, &summary.traits_added);
-        }
-        if (!given) return stop(given.failure());
-      }
-      double seconds = 0;
-      if (!*done) {
-        const auto t0 = std::chrono::steady_clock::now();
-        Status reference = Ok();
-        if (!job.external) {
-          std::lock_guard<std::mutex> lock(reference_locks.at(ReferenceId(job)));
-          reference = EnsureReference(job, options);
-        }
-        if (!reference) return stop(reference.failure());
-        auto measured = MeasureJob(job, options);
-        if (!measured) return stop(measured.failure());
-        Status inserted = Ok();
-        {
-          std::lock_guard<std::mutex> lock(mutex);
-          inserted = store->Insert(*measured);
-        }
-        if (!inserted) return stop(inserted.failure());
-        seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      }
-      std::lock_guard<std::mutex> lock(mutex);
-      if (*done)
-        ++summary.skipped;
-      else
-        ++summary.computed, computed_s += seconds;
-      ++progress.done;
-      progress.skipped = summary.skipped;
-      progress.current = what;
-      progress.elapsed_s = SecondsSince(start);
-      const int workers = std::max(1, options.jobs);
-      progress.eta_s = summary.computed
-                           ? computed_s / summary.computed * std::max(0, to_compute - summary.computed) / workers
-                           : 0;
-      if (options.progress) options.progress(progress);
-    }
-  };
+  JobWorkers workers{jobs, options, *store, summary, progress, reference_locks, *counted,
+                     std::chrono::steady_clock::now()};
   std::vector<std::thread> threads;
-  for (int i = 1; i < std::max(1, options.jobs); ++i) threads.emplace_back(worker);
-  worker();
+  for (int i = 1; i < std::max(1, options.jobs); ++i) threads.emplace_back([&] { workers.Work(); });
+  workers.Work();
   for (std::thread& t : threads) t.join();
-  if (failed) {
+  if (workers.failed) {
     // A store this run created and put nothing into is not left behind.
     store.reset();
     if (!store_existed && summary.computed == 0) {
@@ -562,20 +589,19 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
     }
     return summary;
   }
-
   if (options.check_shots) {
-    if (Status s = CheckShots(all_jobs, options, *store, &progress, &summary, start); !s) {
+    if (Status s = CheckShots(all_jobs, options, *store, &progress, &summary, workers.start); !s) {
       summary.error = s.failure();
       return summary;
     }
   }
   if (options.benchmark && options.benchmark->enabled) {
-    if (Status s = RunBenchmarks(all_jobs, *options.benchmark, options, *store, &progress, &summary, start); !s) {
+    if (Status s = RunBenchmarks(all_jobs, *options.benchmark, options, *store, &progress, &summary, workers.start);
+        !s) {
       summary.error = s.failure();
       return summary;
     }
   }
-
   if (!options.keep_frames) {
     std::error_code ec;
     for (const auto& [ref, lock] : reference_locks) fs::remove_all(fs::path(options.work_dir) / ("ref-" + ref), ec);

@@ -34,7 +34,7 @@ Result<ResolvedKernel> KernelOf(const RenderSettings& settings) {
   auto variant = ResolveVariant(settings);
   if (!variant) return variant.failure();
   const bool sg_light = settings.scene.light.type == shading::LightType::kSg;
-  auto module = KernelSpirv("render.comp", variant->user.get(), sg_light, nullptr);
+  auto module = KernelSpirv("render.comp", variant->user.get(), sg_light, nullptr, CountsGlints(variant->id));
   if (!module) return module.failure();
   auto specialization = KernelSpecialization(*variant, settings);
   return ResolvedKernel{std::move(*variant), std::move(*module), {specialization.begin(), specialization.end()}};

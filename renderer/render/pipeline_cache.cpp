@@ -34,6 +34,7 @@ constexpr std::string_view kUserParamsFile = "user_params.glsl";  // UserParamsG
 // Files of `overrides` (test hooks) come first: the includer takes the
 // first file of a name.
 std::vector<shading::GlslFile> KernelFiles(std::string_view kernel, bool user_variant, bool sg_light, bool meshes,
+                                           bool counted_glints,
                                            std::span<const std::pair<std::string, std::string>> overrides,
                                            shading::GlslFile* main) {
   std::vector<shading::GlslFile> extra;
@@ -52,6 +53,7 @@ std::vector<shading::GlslFile> KernelFiles(std::string_view kernel, bool user_va
   if (user_variant) defines += "#define SHIMMER_USER_VARIANT\n";
   if (sg_light) defines += "#define SHIMMER_SG_LIGHT\n";
   if (meshes) defines += "#define SHIMMER_MESHES\n";
+  if (counted_glints) defines += "#define SHIMMER_COUNTED_GLINTS\n";
   if (!defines.empty()) main->text.insert(main->text.find('\n') + 1, defines + "#line 2\n");
   return extra;
 }
@@ -232,18 +234,27 @@ DeviceCache& Devices() {
 
 }  // namespace
 
+bool CountsGlints(int variant_id) {
+  for (const char* name : {"glints-zk16-counting", "glints-db23"})
+    if (const shading::VariantInfo* info = shading::FindVariant(name); info && info->id == variant_id) return true;
+  return false;
+}
+
 Result<std::shared_ptr<const KernelModule>> KernelSpirv(std::string_view kernel, const shading::UserVariant* user,
-                                                        bool sg_light, bool meshes, double* compile_ms) {
+                                                        bool sg_light, bool meshes, double* compile_ms,
+                                                        bool counted_glints) {
   const std::string prelude = user ? shading::UserParamsGlsl(*user) : std::string();
   const auto overrides = testing::CurrentTestHooks().source_overrides;
   std::string key = std::string(kernel) + (sg_light ? ":sg:" : ":delta:") + (meshes ? "mesh:" : "") +
+                    (counted_glints ? "counted:" : "") +
                     (user ? "user:" + prelude + "\n" + user->text : std::string());
   for (const auto& [name, body] : overrides) key += '\0' + name + '\0' + body;
   const auto t0 = Clock::now();
   std::lock_guard lock(Modules().mutex);
   if (auto it = Modules().modules.find(key); it != Modules().modules.end()) return it->second;
   shading::GlslFile main;
-  std::vector<shading::GlslFile> extra = KernelFiles(kernel, user != nullptr, sg_light, meshes, overrides, &main);
+  std::vector<shading::GlslFile> extra =
+      KernelFiles(kernel, user != nullptr, sg_light, meshes, counted_glints, overrides, &main);
   if (user) {
     extra.push_back({std::string(kUserParamsFile), prelude});
     extra.push_back({std::string(kUserVariantFile), user->text});

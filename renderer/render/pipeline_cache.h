@@ -32,7 +32,15 @@ struct KernelModule {
   std::string key;  // shading::CompileKey of its sources
 };
 Result<std::shared_ptr<const KernelModule>> KernelSpirv(std::string_view kernel, const shading::UserVariant* user,
-                                                        bool sg_light, bool meshes, double* compile_ms);
+                                                        bool sg_light, bool meshes, double* compile_ms,
+                                                        bool counted_glints = false);
+
+// Whether the variant is one of the glint variants that count the
+// footprint's microdetails (glints-zk16-counting, glints-db23): their kernel
+// is compiled with SHIMMER_COUNTED_GLINTS (glints.glsl). Every other kernel
+// leaves their dispatch out, so that adding them left its SPIR-V, and the
+// job ids built on it, as they were.
+bool CountsGlints(int variant_id);
 
 // shading::CanonicalSpirvHash of `kernel` specialized to `specialization`
 // (the module AcquirePipeline hands the driver), kept per process; the

@@ -35,7 +35,7 @@ Result<ResolvedKernel> KernelOf(const RenderSettings& settings) {
   if (!variant) return variant.failure();
   const bool sg_light = settings.scene.light.type == shading::LightType::kSg;
   const bool meshes = (scene::SceneFeatures(settings.scene) & shading::kSceneMeshes) != 0;
-  auto module = KernelSpirv("render.comp", variant->user.get(), sg_light, meshes, nullptr);
+  auto module = KernelSpirv("render.comp", variant->user.get(), sg_light, meshes, nullptr, CountsGlints(variant->id));
   if (!module) return module.failure();
   auto specialization = KernelSpecialization(*variant, settings);
   return ResolvedKernel{std::move(*variant), std::move(*module), {specialization.begin(), specialization.end()}};

@@ -195,7 +195,8 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
   // Kernel source first: a compile error is reported before touching Vulkan.
   const bool sg_light = settings.scene.light.type == shading::LightType::kSg;
   const bool meshes = (scene::SceneFeatures(settings.scene) & shading::kSceneMeshes) != 0;
-  auto spirv = KernelSpirv("render.comp", im.variant.user.get(), sg_light, meshes, &im.timings.compile_ms);
+  auto spirv = KernelSpirv("render.comp", im.variant.user.get(), sg_light, meshes, &im.timings.compile_ms,
+                           CountsGlints(im.variant.id));
   if (!spirv) return spirv.failure();
 
   vk::ContextOptions options;

@@ -30,6 +30,8 @@ const int GLINT_FILTERED = 0;  // glints-zk16: levels and probes from the pixel 
 const int GLINT_POINT = 1;     // none: the finest level at the point (what the reference averages)
 const int GLINT_NAIVE = 2;     // glints-naive: the level-0 cell holding the point, its nearest bin
 const int GLINT_SMOOTH = 3;    // glints-smooth: D_g itself
+const int GLINT_COUNTING = 4;  // glints-zk16-counting: zk16's cells and bins, their weights distributing the count
+const int GLINT_DB23 = 5;      // glints-db23: Deliot and Belcour's anisotropic grids, the count distributed
 
 // Seed 001, "Performance": maximum anisotropy 16x.
 const int GLINT_MAX_ANISOTROPY = 16;
@@ -78,6 +80,10 @@ uint glintCellHash(int level, ivec2 cell) {
 uint glintBinHash(uint cellHash, ivec2 bin) {
   return glintHash(uint(bin.y) ^ glintHash(uint(bin.x) ^ glintHash(cellHash ^ 0x85ebca6bu)));
 }
+
+// A cell of glints-db23's grid `grid` (a hash of its level, ratio and
+// direction).
+uint glintGridCellHash(uint grid, ivec2 cell) { return glintHash(uint(cell.y) ^ glintHash(uint(cell.x) ^ grid)); }
 
 // A uniform number in (0, 1), never 0 or 1.
 real glintUniform(uint h) { return (real(h >> 8u) + real(0.5)) * real(1.0 / 16777216.0); }
@@ -289,7 +295,295 @@ real glintFiniteComponent(real x) {
 }
 vec2 glintFinite(vec2 v) { return vec2(glintFiniteComponent(v.x), glintFiniteComponent(v.y)); }
 
+// ---- Counting the footprint's microdetails --------------------------------
+// glints-zk16 blends independent draws linearly: over the 4 bins around h, the
+// 4 cells around each probe, two levels and up to 16 probes (seed 001, slide
+// 13: "one binomial draw per grid cell, trilinear interpolation"; slide 15:
+// "maximum anisotropy 16x"). A blend sum_i w_i k_i of independent draws keeps
+// the mean and multiplies the variance by sum_i w_i^2, well below 1: the
+// published model's pixels are smoother than the binomial law of their
+// microdetails. Deliot and Belcour ("Real-Time Rendering of Glinty
+// Appearances using Distributed Binomial Laws on Anisotropic Grids", HPG
+// 2023) keep the law with the counting their title names: the footprint's
+// N microdetails are distributed among the draws by the blend's weights, draw
+// i counting B(N w_i, p_i), and the count is the sum. Independent binomials
+// of one p add to the binomial of the summed trials, so the count is B(N, p)
+// whatever the weights (a Poisson-binomial of mean N sum_i w_i p_i where the
+// p_i differ, as the perturbed bins make them). The inversion is monotone in
+// n, so a weight that grows adds microdetails one at a time: sparkles appear
+// and stay rather than being redrawn. Each draw (cell, bin) must enter once:
+// the same draw read twice would count its microdetails twice, correlated.
+
+// The count over the footprint's microdetails, and what turns it into a
+// slope density: count / (total binArea).
+struct GlintCount {
+  real count;    // microdetails that reflect at h
+  real total;    // N, the microdetails of the footprint
+  real binArea;  // w^2, the slope area one microdetail's count spreads over
+};
+
+// N: the footprint's area on the surface in level-0 cells (one microdetail
+// each in expectation), at least one: a pixel smaller than a microdetail
+// sees at most that one.
+real glintFootprintMicrodetails(vec2 dx, vec2 dy, real areaScale) {
+  return areaScale * max(abs(cross2(dx, dy)), real(1));
+}
+
+// One cell's share n of the footprint, distributed over the 4 bins around
+// hpp by their bilinear weights: sum_j B(n t_j, p_j). Its mean is that of
+// glintCellDensity's blend times n w^2; its variance n sum_j t_j p_j (1 - p_j),
+// the binomial's, where the blend's is sum_j t_j^2 of that.
+real glintCellCount(GlintMaterial g, uint ch, vec2 hpp, real n, real w) {
+  if (!(n > real(0))) return real(0);
+  vec2 a = clampAlpha(g.alpha);
+  vec2 offset = vec2(glintUniform(ch), glintUniform(glintHash(ch)));
+  vec2 t = hpp / w - offset - vec2(real(0.5), real(0.5));  // bin b's centre at t = b
+  vec2 b0 = floor(t);
+  vec2 f = t - b0;
+  vec2 e0 = (b0 + offset) * w;
+  real px0 = glintInterval(e0.x, e0.x + w, a.x);
+  real px1 = glintInterval(e0.x + w, e0.x + real(2) * w, a.x);
+  real py0 = glintInterval(e0.y, e0.y + w, a.y);
+  real py1 = glintInterval(e0.y + w, e0.y + real(2) * w, a.y);
+  ivec2 i0 = ivec2(b0);
+  real k = glintDraw(n * (real(1) - f.x) * (real(1) - f.y), px0 * py0, glintBinHash(ch, i0));
+  k += glintDraw(n * f.x * (real(1) - f.y), px1 * py0, glintBinHash(ch, i0 + ivec2(1, 0)));
+  k += glintDraw(n * (real(1) - f.x) * f.y, px0 * py1, glintBinHash(ch, i0 + ivec2(0, 1)));
+  k += glintDraw(n * f.x * f.y, px1 * py1, glintBinHash(ch, i0 + ivec2(1, 1)));
+  return k;
+}
+
+// glints-zk16's probe i along the footprint's long axis (level-0 cells).
+vec2 glintProbe(vec2 p, GlintLod lod, int i) {
+  return p + lod.step * (real(i) + real(0.5) - real(0.5) * real(lod.probes));
+}
+
+// The bilinear weight of cell c at q (cell units, centres at integers).
+real glintTent(vec2 q, ivec2 c) {
+  vec2 d = abs(q - vec2(c));
+  return max(real(1) - d.x, real(0)) * max(real(1) - d.y, real(0));
+}
+
+// glints-zk16-counting at one level: the footprint's share n of microdetails
+// distributed over the cells its probes read, with the weights of zk16's
+// blend (1/probes times each probe's bilinear weights). Probes closer than
+// two cells share cells; a cell's draw is made once, by the first probe that
+// reads it, with the weights of all the probes that do (those form a run:
+// the probes lie on a line).
+real glintCountingLevel(GlintMaterial g, int level, vec2 p, GlintLod lod, vec2 hpp, real n, real w) {
+  if (!(n > real(0))) return real(0);
+  real size = exp2(real(level));
+  vec2 centre = vec2(real(0.5), real(0.5));
+  real share = n / real(lod.probes);
+  real count = real(0);
+  SHIMMER_DONT_UNROLL
+  for (int i = 0; i < lod.probes; i++) {
+    vec2 q = glintProbe(p, lod, i) / size - centre;
+    vec2 before = glintProbe(p, lod, i - 1) / size - centre;
+    ivec2 c0 = ivec2(floor(q));
+    for (int c = 0; c < 4; c++) {
+      ivec2 cell = c0 + ivec2(c & 1, c >> 1);
+      real weight = glintTent(q, cell);
+      if (!(weight > real(0)) || (i > 0 && glintTent(before, cell) > real(0))) continue;
+      SHIMMER_DONT_UNROLL
+      for (int j = i + 1; j < lod.probes; j++) {
+        real wj = glintTent(glintProbe(p, lod, j) / size - centre, cell);
+        if (!(wj > real(0))) break;
+        weight += wj;
+      }
+      count += glintCellCount(g, glintCellHash(level, cell), hpp, share * weight, w);
+    }
+  }
+  return count;
+}
+
+// ---- glints-db23: anisotropic grids ------------------------------------------
+// Deliot and Belcour (HPG 2023), the grids of their title: instead of
+// probing an isotropic level along the footprint, read grids whose cells have
+// the footprint's shape: side 2^L across its short axis, 2^L rho along the
+// long one, turned to its direction. L (levels), rho (powers of 2 up to
+// GLINT_DB23_MAX_RATIO) and the direction (pi / (2 rho) apart: a longer cell
+// needs finer turns) are discrete; the footprint reads the grids around its
+// own L, rho and direction, linearly interpolated, and in each grid the 3
+// cells of a triangular lattice around its centre (barycentric). Each grid
+// and cell is a draw of its own, so the interpolation weights distribute the
+// count without drawing any (cell, bin) twice.
+const int GLINT_DB23_MAX_RATIO_LOG2 = 6;  // cells up to 64 times longer than wide
+
+// The footprint's axes (level-0 cells), as glintLod: the eigenvectors of
+// dx dx^T + dy dy^T, the major length and the minor = area / major.
+struct GlintEllipse {
+  real major;
+  real minor;
+  real angle;  // of the long axis, in [0, pi)
+};
+
+GlintEllipse glintEllipse(vec2 dx, vec2 dy) {
+  real xx = dx.x * dx.x + dy.x * dy.x;
+  real yy = dx.y * dx.y + dy.y * dy.y;
+  real xy = dx.x * dx.y + dy.x * dy.y;
+  real half_trace = real(0.5) * (xx + yy);
+  real root = sqrt(sqr(real(0.5) * (xx - yy)) + xy * xy);
+  GlintEllipse e;
+  e.major = sqrt(half_trace + root);
+  e.minor = e.major > real(0) ? abs(cross2(dx, dy)) / e.major : real(0);
+  e.angle = real(0);
+  if (root > real(0)) {
+    vec2 v = xx >= yy ? vec2(half_trace + root - yy, xy) : vec2(xy, half_trace + root - xx);
+    if (length(v) > real(0)) e.angle = atan(v.y, v.x);
+  }
+  if (e.angle < real(0)) e.angle += PI;
+  if (!(e.angle < PI)) e.angle = real(0);
+  return e;
+}
+
+// One grid's share n: the footprint centre p (level-0 cells) in the grid of
+// level L, ratio 2^e and direction index k, and the 3 lattice cells around
+// it. The lattice's rows are one cell apart across the long axis, its cells
+// rho 2^L long along it, the rows shifted by half a cell (a triangular
+// lattice: 3 cells, not 4, carry a point's barycentric weights).
+real glintDb23Grid(GlintMaterial g, int level, int e, int k, vec2 p, vec2 hpp, real n, real w) {
+  if (!(n > real(0))) return real(0);
+  real rho = exp2(real(e));
+  real angle = real(k) * PI / (real(2) * rho);
+  vec2 along = vec2(cos(angle), sin(angle));
+  vec2 across = vec2(-along.y, along.x);
+  real size = exp2(real(level));
+  // (a, b): the lattice's skewed coordinates, rows b across the long axis.
+  real y = dot(p, across) / (size * real(0.86602540378443865));
+  real x = dot(p, along) / (size * rho) - real(0.5) * y;
+  vec2 lim = vec2(real(1e9), real(1e9));
+  vec2 s = clamp(vec2(x, y), -lim, lim);
+  vec2 s0 = floor(s);
+  vec2 f = s - s0;
+  ivec2 c = ivec2(s0);
+  uint grid = glintHash(uint(k) ^ glintHash(uint(e) ^ glintHash(uint(level) + 0x632be5abu)));
+  real count = real(0);
+  if (f.x + f.y < real(1)) {
+    count += glintCellCount(g, glintGridCellHash(grid, c), hpp, n * (real(1) - f.x - f.y), w);
+    count += glintCellCount(g, glintGridCellHash(grid, c + ivec2(1, 0)), hpp, n * f.x, w);
+    count += glintCellCount(g, glintGridCellHash(grid, c + ivec2(0, 1)), hpp, n * f.y, w);
+  } else {
+    count += glintCellCount(g, glintGridCellHash(grid, c + ivec2(1, 1)), hpp, n * (f.x + f.y - real(1)), w);
+    count += glintCellCount(g, glintGridCellHash(grid, c + ivec2(1, 0)), hpp, n * (real(1) - f.y), w);
+    count += glintCellCount(g, glintGridCellHash(grid, c + ivec2(0, 1)), hpp, n * (real(1) - f.x), w);
+  }
+  return count;
+}
+
+// The 3 grids of one level around the footprint's ratio and direction, and
+// their weights. Ratio 2^e0 has directions pi / (2 rho0) apart, 2^(e0+1)
+// twice as many: in (f, s), f the position between directions k and k + 1
+// of ratio e0 and s between the two ratios, the cell is a trapezoid with
+// corners B0, B1 (ratio e0) and T0, Th, T1 (ratio e0 + 1 at 2k, 2k + 1,
+// 2k + 2), cut into the triangles (B0 T0 Th), (B0 Th B1), (B1 Th T1).
+// Linear in each, continuous across them, across directions and across
+// ratios (s = 1 there is s = 0 of the next ratio, on the same directions).
+// Ratio 1 is isotropic: one grid, direction 0.
+real glintDb23Level(GlintMaterial g, int level, GlintEllipse el, real cellMinor, vec2 p, vec2 hpp, real n, real w) {
+  if (!(n > real(0))) return real(0);
+  real r = clamp(max(el.major, cellMinor) / cellMinor, real(1), exp2(real(GLINT_DB23_MAX_RATIO_LOG2)));
+  int e0 = min(int(floor(log2(r))), GLINT_DB23_MAX_RATIO_LOG2 - 1);
+  real rho0 = exp2(real(e0));
+  real s = clamp((r - rho0) / rho0, real(0), real(1));
+  int turns0 = 2 * int(rho0);  // directions of ratio e0 in [0, pi)
+  real u = el.angle / (PI / real(turns0));
+  int k = min(int(floor(u)), turns0 - 1);
+  real f = clamp(u - real(k), real(0), real(1));
+  real wB0, wB1, wT0, wTh, wT1;
+  if (f < real(0.5) * s) {
+    wTh = real(2) * f;
+    wT0 = s - wTh;
+    wB0 = real(1) - s;
+    wB1 = real(0);
+    wT1 = real(0);
+  } else if (f > real(1) - real(0.5) * s) {
+    wTh = real(2) * (real(1) - f);
+    wT1 = s - wTh;
+    wB1 = real(1) - s;
+    wB0 = real(0);
+    wT0 = real(0);
+  } else {
+    wTh = s;
+    wB1 = f - real(0.5) * s;
+    wB0 = real(1) - f - real(0.5) * s;
+    wT0 = real(0);
+    wT1 = real(0);
+  }
+  int kB0 = k;
+  int kB1 = k + 1 == turns0 ? 0 : k + 1;
+  if (e0 == 0) {  // ratio 1: B0 and B1 are the one isotropic grid
+    wB0 += wB1;
+    wB1 = real(0);
+    kB0 = 0;
+  }
+  int turns1 = 2 * turns0;
+  int kT1 = 2 * k + 2 == turns1 ? 0 : 2 * k + 2;
+  real count = real(0);
+  if (wB0 > real(0)) count += glintDb23Grid(g, level, e0, kB0, p, hpp, n * wB0, w);
+  if (wB1 > real(0)) count += glintDb23Grid(g, level, e0, kB1, p, hpp, n * wB1, w);
+  if (wT0 > real(0)) count += glintDb23Grid(g, level, e0 + 1, 2 * k, p, hpp, n * wT0, w);
+  if (wTh > real(0)) count += glintDb23Grid(g, level, e0 + 1, 2 * k + 1, p, hpp, n * wTh, w);
+  if (wT1 > real(0)) count += glintDb23Grid(g, level, e0 + 1, kT1, p, hpp, n * wT1, w);
+  return count;
+}
+
+// The count of the two models that keep the binomial law (GLINT_COUNTING,
+// GLINT_DB23) for the footprint fp at hpp.
+GlintCount glintCountedDraws(int mode, GlintMaterial g, vec2 hpp, GlintFootprint fp) {
+  GlintCount o;
+  real w = real(1.41421356237309505) * clamp(g.alphaL, ALPHA_MIN, ALPHA_MAX);
+  o.binArea = w * w;
+  o.count = real(0);
+  o.total = real(1);
+  if (!(g.density > real(0))) return o;
+  real cell = inversesqrt(g.density);
+  vec2 lim = vec2(real(1e9), real(1e9));
+  vec2 p = clamp(fp.uv / cell, -lim, lim);
+  if (!(p.x == p.x) || !(p.y == p.y)) p = vec2(real(0), real(0));
+  real areaScale = max(fp.areaScale, real(1e-6));
+  if (!(areaScale < real(1e15))) areaScale = real(1e15);
+  vec2 dx = glintFinite(fp.duvdx / cell);
+  vec2 dy = glintFinite(fp.duvdy / cell);
+  o.total = glintFootprintMicrodetails(dx, dy, areaScale);
+  if (mode == GLINT_COUNTING) {
+    GlintLod lod = glintLod(dx, dy);
+    real level = clamp(lod.level, real(0), real(GLINT_MAX_LEVEL));
+    int l0 = min(int(floor(level)), GLINT_MAX_LEVEL - 1);
+    real t = level - real(l0);
+    o.count = glintCountingLevel(g, l0, p, lod, hpp, o.total * (real(1) - t), w) +
+              glintCountingLevel(g, l0 + 1, p, lod, hpp, o.total * t, w);
+    return o;
+  }
+  GlintEllipse el = glintEllipse(dx, dy);
+  real cellMinor = max(max(el.minor, el.major / exp2(real(GLINT_DB23_MAX_RATIO_LOG2))), real(1));
+  real level = clamp(log2(cellMinor), real(0), real(GLINT_MAX_LEVEL));
+  int l0 = min(int(floor(level)), GLINT_MAX_LEVEL - 1);
+  real t = level - real(l0);
+  o.count = glintDb23Level(g, l0, el, cellMinor, p, hpp, o.total * (real(1) - t), w) +
+            glintDb23Level(g, l0 + 1, el, cellMinor, p, hpp, o.total * t, w);
+  return o;
+}
+
+FilteredNdf glintCountedNdf(int mode, GlintMaterial g, vec2 hpp, GlintFootprint fp) {
+  FilteredNdf o;
+  o.alpha_eff = glintGlobalAlpha(g);
+  hpp = clampSlope(hpp);
+  if (!(g.density > real(0))) {
+    o.slope_density = slopeDensity(NDF_BECKMANN, hpp, o.alpha_eff);
+    o.density = o.slope_density * slopeToSolidAngle(hpp);
+    return o;
+  }
+  GlintCount c = glintCountedDraws(mode, g, hpp, fp);
+  o.slope_density = c.count / (c.total * c.binArea);
+  o.density = o.slope_density * slopeToSolidAngle(hpp);
+  return o;
+}
+
 FilteredNdf glintNdf(int mode, GlintMaterial g, vec2 hpp, GlintFootprint fp) {
+#ifdef SHIMMER_COUNTED_GLINTS
+  if (mode == GLINT_COUNTING || mode == GLINT_DB23) return glintCountedNdf(mode, g, hpp, fp);
+#endif
   FilteredNdf o;
   vec2 alphaG = glintGlobalAlpha(g);
   o.alpha_eff = alphaG;
@@ -330,11 +624,29 @@ FilteredNdf glintNdf(int mode, GlintMaterial g, vec2 hpp, GlintFootprint fp) {
   return o;
 }
 
+// The count a mode gives over the footprint's N microdetails at hpp. For the
+// blending modes (glints-zk16, none, glints-naive) and D_g, the count that
+// their slope density stands for: slope_density N w^2, so that every mode's
+// count is compared with the same binomial law (glints_test.cpp).
+GlintCount glintCount(int mode, GlintMaterial g, vec2 hpp, GlintFootprint fp) {
+  if (mode == GLINT_COUNTING || mode == GLINT_DB23) return glintCountedDraws(mode, g, clampSlope(hpp), fp);
+  GlintCount o;
+  real w = real(1.41421356237309505) * clamp(g.alphaL, ALPHA_MIN, ALPHA_MAX);
+  o.binArea = w * w;
+  real cell = g.density > real(0) ? inversesqrt(g.density) : real(1);
+  real areaScale = clamp(fp.areaScale, real(1e-6), real(1e15));
+  o.total = glintFootprintMicrodetails(glintFinite(fp.duvdx / cell), glintFinite(fp.duvdy / cell), areaScale);
+  o.count = glintNdf(mode, g, hpp, fp).slope_density * o.total * o.binArea;
+  return o;
+}
+
 // The glint mode a variant shades a glint material with (variants.glsl).
 int glintModeOf(int variant) {
   int v = geometricVariant(variant);
   if (v == VARIANT_GLINTS_ZK16) return GLINT_FILTERED;
   if (v == VARIANT_GLINTS_NAIVE) return GLINT_NAIVE;
   if (v == VARIANT_GLINTS_SMOOTH) return GLINT_SMOOTH;
-  return GLINT_POINT;
+  // Selects, not branches: the kernels of the variants above fold them away
+  // without a trace, so their SPIR-V (and job ids) stay as they were.
+  return v == VARIANT_GLINTS_ZK16_COUNTING ? GLINT_COUNTING : (v == VARIANT_GLINTS_DB23 ? GLINT_DB23 : GLINT_POINT);
 }

@@ -16,6 +16,9 @@ thread_local int g_scene_features = kAllSceneFeatures;
 #define SHIMMER_SCENE_WORDS
 #define SHIMMER_SCENE_FEATURES
 #define SHIMMER_MESHES  // the oracle traces every kind; SCENE_FEATURES picks
+// The oracle shades every glint variant; a kernel compiles the counted ones
+// only when it shades one (pipeline_cache.cpp).
+#define SHIMMER_COUNTED_GLINTS
 #define SCENE_FEATURES g_scene_features
 namespace glsl_f32 {
 using real = float;
@@ -46,6 +49,7 @@ FilteredNdf variantAt(int variant, int ndf, vec2 alpha, ShadingFootprint f, Vari
 static_assert(kPixelCandidates == glsl_f32::PIXEL_CANDIDATES);
 static_assert(int(GlintMode::kFiltered) == glsl_f32::GLINT_FILTERED && int(GlintMode::kPoint) == glsl_f32::GLINT_POINT &&
               int(GlintMode::kNaive) == glsl_f32::GLINT_NAIVE && int(GlintMode::kSmooth) == glsl_f32::GLINT_SMOOTH);
+static_assert(int(GlintMode::kCounting) == glsl_f32::GLINT_COUNTING && int(GlintMode::kDb23) == glsl_f32::GLINT_DB23);
 static_assert(int(Ndf::kGlints) == glsl_f32::NDF_GLINTS);
 static_assert(kNormalMapFilterStride == glsl_f32::NMF_STRIDE);
 static_assert(int(LightType::kSg) == glsl_f32::LIGHT_SG && int(LightType::kSphere) == glsl_f32::LIGHT_SPHERE);
@@ -91,6 +95,9 @@ struct Glsl<float> {
   static auto Glint(int mode, GlintMaterial g, glm::vec<2, float> hpp, GlintFootprint fp) {
     return glsl_f32::glintNdf(mode, g, hpp, fp);
   }
+  static auto Count(int mode, GlintMaterial g, glm::vec<2, float> hpp, GlintFootprint fp) {
+    return glsl_f32::glintCount(mode, g, hpp, fp);
+  }
   static float Binomial(float n, float p, float u, float u2) { return glsl_f32::glintBinomial(n, p, u, u2); }
   static float Interval(float a, float b, float alpha) { return glsl_f32::glintInterval(a, b, alpha); }
 };
@@ -120,6 +127,9 @@ struct Glsl<double> {
   using GlintFootprint = glsl_f64::GlintFootprint;
   static auto Glint(int mode, GlintMaterial g, glm::vec<2, double> hpp, GlintFootprint fp) {
     return glsl_f64::glintNdf(mode, g, hpp, fp);
+  }
+  static auto Count(int mode, GlintMaterial g, glm::vec<2, double> hpp, GlintFootprint fp) {
+    return glsl_f64::glintCount(mode, g, hpp, fp);
   }
   static double Binomial(double n, double p, double u, double u2) { return glsl_f64::glintBinomial(n, p, u, u2); }
   static double Interval(double a, double b, double alpha) { return glsl_f64::glintInterval(a, b, alpha); }
@@ -167,6 +177,21 @@ FilteredNdf<T> EvaluateGlints(GlintMode mode, const MaterialDesc& material, glm:
   f.areaScale = footprint.area_scale;
   auto r = Glsl<T>::Glint(static_cast<int>(mode), g, hpp, f);
   return {r.slope_density, r.density, r.alpha_eff};
+}
+template <class T>
+GlintCount<T> CountGlints(GlintMode mode, const MaterialDesc& material, glm::vec<2, T> hpp,
+                          const GlintFootprint<T>& footprint) {
+  typename Glsl<T>::GlintMaterial g;
+  g.alpha = glm::vec<2, T>(material.alpha);
+  g.alphaL = T(material.glint_alpha_l);
+  g.density = T(material.glint_density);
+  typename Glsl<T>::GlintFootprint f;
+  f.uv = footprint.uv;
+  f.duvdx = footprint.duvdx;
+  f.duvdy = footprint.duvdy;
+  f.areaScale = footprint.area_scale;
+  auto r = Glsl<T>::Count(static_cast<int>(mode), g, hpp, f);
+  return {r.count, r.total, r.binArea};
 }
 template <class T>
 T GlintBinomial(T n, T p, T u, T u2) {
@@ -363,6 +388,7 @@ SHIMMER_INSTANTIATE(double)
   template Footprint<T> WithChainedProjection<T>(Footprint<T>);                                                \
   template FilteredNdf<T> EvaluateGlints<T>(GlintMode, const MaterialDesc&, glm::vec<2, T>,                     \
                                             const GlintFootprint<T>&);                                          \
+  template GlintCount<T> CountGlints<T>(GlintMode, const MaterialDesc&, glm::vec<2, T>, const GlintFootprint<T>&); \
   template T GlintBinomial<T>(T, T, T, T);                                                                      \
   template T GlintInterval<T>(T, T, T);                                                                         \
   template T GgxRectMeanSeed<T>(glm::vec<2, T>, glm::vec<2, T>, glm::vec<2, T>);                               \

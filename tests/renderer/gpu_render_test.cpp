@@ -197,10 +197,12 @@ TEST(GpuRender, NormalMapFiltersNeedANormalMap) {
 // 2 % of pixels allowed), the footprint from the quad and from ray
 // differentials, and a grazing plane and a sphere.
 TEST(GpuOracle, GlintScenes) {
-  for (const char* v : {"none", "glints-zk16", "glints-naive", "glints-smooth"})
+  for (const char* v : {"none", "glints-zk16", "glints-naive", "glints-smooth", "glints-zk16-counting", "glints-db23"})
     ExpectMatchesOracle("glint-plane", v, DerivativeSource::kQuadFine);
-  ExpectMatchesOracle("glint-sphere", "glints-zk16", DerivativeSource::kQuadFine);
-  ExpectMatchesOracle("glint-sphere", "glints-zk16", DerivativeSource::kAnalytic);
+  for (const char* v : {"glints-zk16", "glints-zk16-counting", "glints-db23"}) {
+    ExpectMatchesOracle("glint-sphere", v, DerivativeSource::kQuadFine);
+    ExpectMatchesOracle("glint-sphere", v, DerivativeSource::kAnalytic);
+  }
 }
 
 TEST(GpuRender, GlintVariantsAndGlintMaterialsGoTogether) {

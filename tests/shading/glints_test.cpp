@@ -214,7 +214,8 @@ TEST(Glints, DeterministicAndContinuousUnderSubPixelMotion) {
 }
 
 // No NaN, Inf or negative value for degenerate footprints (zero, huge,
-// infinite, NaN, grazing half vectors, extreme materials), float and double.
+// infinite, NaN, extremely anisotropic, grazing half vectors, extreme
+// materials), float and double, every mode.
 TEST(Glints, DegenerateInputsGiveFiniteNonNegativeValues) {
   const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<MaterialDesc> materials = {Glints(0.3, 0.03, 1e4), Glints(1e-4, 1e-4, 1e12), Glints(1, 1, 1e-6),
@@ -222,19 +223,26 @@ TEST(Glints, DegenerateInputsGiveFiniteNonNegativeValues) {
   std::vector<glm::dvec2> slopes = {{0, 0}, {1e8, 0}, {-3e7, 9e7}, {1e-30, -1e-30}, {50, 50}};
   std::vector<std::pair<glm::dvec2, glm::dvec2>> derivs = {
       {{0, 0}, {0, 0}},     {{1e30, 0}, {0, 1e30}}, {{inf, 0}, {0, inf}}, {{nan, 0}, {0, 1}},
-      {{1, 0}, {1, 1e-9}},  {{1e-6, 0}, {0, 50}},   {{-3, 4}, {4, 3}}};
+      {{1, 0}, {1, 1e-9}},  {{1e-6, 0}, {0, 50}},   {{-3, 4}, {4, 3}},       {{1e9, 3e8}, {-1e-9, 1e-8}}};
   std::vector<glm::dvec2> points = {{0, 0}, {-1e12, 1e12}, {inf, 0}, {nan, nan}, {1.5, -2.25}};
   for (const MaterialDesc& m : materials)
     for (glm::dvec2 s : slopes)
       for (auto [dx, dy] : derivs)
         for (glm::dvec2 uv : points)
-          for (GlintMode mode : {GlintMode::kFiltered, GlintMode::kPoint, GlintMode::kNaive, GlintMode::kSmooth}) {
+          for (GlintMode mode : {GlintMode::kFiltered, GlintMode::kPoint, GlintMode::kNaive, GlintMode::kSmooth,
+                                 GlintMode::kCounting, GlintMode::kDb23}) {
             GlintFootprint<double> fd{uv, dx, dy, 1.0};
             GlintFootprint<float> ff{glm::vec2(uv), glm::vec2(dx), glm::vec2(dy), 1.0f};
             const auto d = EvaluateGlints<double>(mode, m, s, fd);
             const auto f = EvaluateGlints<float>(mode, m, glm::vec2(s), ff);
             for (double v : {d.density, d.slope_density, double(f.density), double(f.slope_density)}) {
               ASSERT_TRUE(std::isfinite(v)) << "mode " << int(mode) << " slope " << s.x << " dx " << dx.x;
+              ASSERT_GE(v, 0.0);
+            }
+            const auto cd = CountGlints<double>(mode, m, s, fd);
+            const auto cf = CountGlints<float>(mode, m, glm::vec2(s), ff);
+            for (double v : {cd.count, cd.total, double(cf.count), double(cf.total)}) {
+              ASSERT_TRUE(std::isfinite(v)) << "count, mode " << int(mode) << " slope " << s.x << " dx " << dx.x;
               ASSERT_GE(v, 0.0);
             }
           }
@@ -248,7 +256,8 @@ TEST(Glints, FloatAgreesWithDouble) {
   const MaterialDesc m = Glints(0.3, 0.03, 1e4);
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> pos(-10, 10), slope(-0.6, 0.6), width(0.0, 0.3);
-  for (GlintMode mode : {GlintMode::kFiltered, GlintMode::kPoint, GlintMode::kNaive, GlintMode::kSmooth}) {
+  for (GlintMode mode : {GlintMode::kFiltered, GlintMode::kPoint, GlintMode::kNaive, GlintMode::kSmooth,
+                         GlintMode::kCounting, GlintMode::kDb23}) {
     int differ = 0;
     const int trials = 3000;
     for (int i = 0; i < trials; ++i) {

@@ -124,8 +124,11 @@ struct MaterialDesc {
 // --- Glints (glints.glsl) -------------------------------------------------------
 // How a glint material is read: filtered over the footprint (glints-zk16),
 // at the finest level at the point (none, each reference sample), the naive
-// level-0 cell (glints-naive), or the smooth global NDF (glints-smooth).
-enum class GlintMode { kFiltered = 0, kPoint = 1, kNaive = 2, kSmooth = 3 };
+// level-0 cell (glints-naive), the smooth global NDF (glints-smooth), and
+// the two that count the footprint's microdetails by the binomial law:
+// zk16's grids (glints-zk16-counting) and Deliot and Belcour's anisotropic
+// grids (glints-db23).
+enum class GlintMode { kFiltered = 0, kPoint = 1, kNaive = 2, kSmooth = 3, kCounting = 4, kDb23 = 5 };
 
 // World-scaled texture coordinates, their change per pixel, and the surface
 // area per unit uv area (pixel.glsl).
@@ -141,6 +144,19 @@ struct GlintFootprint {
 template <class T>
 FilteredNdf<T> EvaluateGlints(GlintMode mode, const MaterialDesc& material, glm::vec<2, T> hpp,
                               const GlintFootprint<T>& footprint);
+// The microdetails of the footprint that reflect at hpp (count), out of its
+// total N; the slope density is count / (total bin_area). For the modes that
+// blend draws (kFiltered, kPoint, kNaive) and for kSmooth, the count their
+// density stands for: slope_density total bin_area.
+template <class T>
+struct GlintCount {
+  T count = 0;
+  T total = 0;
+  T bin_area = 0;
+};
+template <class T>
+GlintCount<T> CountGlints(GlintMode mode, const MaterialDesc& material, glm::vec<2, T> hpp,
+                          const GlintFootprint<T>& footprint);
 // The process's draw for a cell of n microdetails in expectation (floor(n)
 // or floor(n) + 1 by the uniform u2), each reflecting with probability p:
 // Binomial(N, p) by the uniform u, monotone in u.

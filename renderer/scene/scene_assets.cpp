@@ -115,21 +115,25 @@ CameraRig FramingRig(glm::dvec3 centre, double radius, double fov_y_deg) {
   return rig;
 }
 
+Primitive MeshPrimitive(std::shared_ptr<const PlacedMesh> mesh) {
+  Primitive p;
+  p.type = Primitive::Type::kMesh;
+  p.radius = 0;
+  p.a = mesh->lo;
+  p.b = mesh->hi;
+  p.mesh = std::move(mesh);
+  return p;
+}
+
 Result<Scene> AssetScene(const std::filesystem::path& file) {
   auto placed = PlaceAsset(file, glm::dmat4(1));
   if (!placed) return placed.failure();
   Scene s;
   s.name = file.filename().string();
-  Primitive p;
-  p.type = Primitive::Type::kMesh;
-  p.radius = 0;
-  p.a = (*placed)->lo;
-  p.b = (*placed)->hi;
-  p.mesh = *placed;
-  s.primitives.push_back(p);
+  s.primitives.push_back(MeshPrimitive(*placed));
   s.light.type = shading::LightType::kDirectional;
   s.light.vec = glm::normalize(glm::dvec3(0.4, 0.8, 0.45));
-  const glm::dvec3 centre = (p.a + p.b) * 0.5;
+  const glm::dvec3 centre = ((*placed)->lo + (*placed)->hi) * 0.5;
   double radius = 0;
   for (const glm::vec3& v : (*placed)->mesh.positions) radius = std::max(radius, glm::length(glm::dvec3(v) - centre));
   s.rig = FramingRig(centre, radius, s.rig.fov_y_deg);

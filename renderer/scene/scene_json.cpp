@@ -238,12 +238,7 @@ Status ReadAssets(const nlohmann::json& j, const std::string& source, Scene& s) 
     if (path.is_relative()) path = std::filesystem::path(source).parent_path() / path;
     auto placed = PlaceAsset(path, transform);
     if (!placed) return Status::Failure(source + ": " + pointer + "/file: " + placed.error());
-    Primitive p;
-    p.type = Primitive::Type::kMesh;
-    p.radius = 0;
-    p.a = (*placed)->lo;
-    p.b = (*placed)->hi;
-    p.mesh = *placed;
+    Primitive p = MeshPrimitive(*placed);
     ReadNormalMap(r, aj, source, pointer, &p);
     if (!r.ok()) return Status::Failure(r.error());
     if (!material.empty()) {

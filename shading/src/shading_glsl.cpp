@@ -163,34 +163,35 @@ FilteredNdf<T> EvaluateVariant(int id, Ndf ndf, glm::vec<2, T> alpha, const Foot
   return {r.slope_density, r.density, r.alpha_eff};
 }
 
+// The glint material and footprint as glints.glsl's structs.
 template <class T>
-FilteredNdf<T> EvaluateGlints(GlintMode mode, const MaterialDesc& material, glm::vec<2, T> hpp,
-                              const GlintFootprint<T>& footprint) {
+typename Glsl<T>::GlintMaterial GlslGlintMaterial(const MaterialDesc& material) {
   typename Glsl<T>::GlintMaterial g;
   g.alpha = glm::vec<2, T>(material.alpha);
   g.alphaL = T(material.glint_alpha_l);
   g.density = T(material.glint_density);
+  return g;
+}
+template <class T>
+typename Glsl<T>::GlintFootprint GlslGlintFootprint(const GlintFootprint<T>& footprint) {
   typename Glsl<T>::GlintFootprint f;
   f.uv = footprint.uv;
   f.duvdx = footprint.duvdx;
   f.duvdy = footprint.duvdy;
   f.areaScale = footprint.area_scale;
-  auto r = Glsl<T>::Glint(static_cast<int>(mode), g, hpp, f);
+  return f;
+}
+
+template <class T>
+FilteredNdf<T> EvaluateGlints(GlintMode mode, const MaterialDesc& material, glm::vec<2, T> hpp,
+                              const GlintFootprint<T>& footprint) {
+  auto r = Glsl<T>::Glint(static_cast<int>(mode), GlslGlintMaterial<T>(material), hpp, GlslGlintFootprint(footprint));
   return {r.slope_density, r.density, r.alpha_eff};
 }
 template <class T>
 GlintCount<T> CountGlints(GlintMode mode, const MaterialDesc& material, glm::vec<2, T> hpp,
                           const GlintFootprint<T>& footprint) {
-  typename Glsl<T>::GlintMaterial g;
-  g.alpha = glm::vec<2, T>(material.alpha);
-  g.alphaL = T(material.glint_alpha_l);
-  g.density = T(material.glint_density);
-  typename Glsl<T>::GlintFootprint f;
-  f.uv = footprint.uv;
-  f.duvdx = footprint.duvdx;
-  f.duvdy = footprint.duvdy;
-  f.areaScale = footprint.area_scale;
-  auto r = Glsl<T>::Count(static_cast<int>(mode), g, hpp, f);
+  auto r = Glsl<T>::Count(static_cast<int>(mode), GlslGlintMaterial<T>(material), hpp, GlslGlintFootprint(footprint));
   return {r.count, r.total, r.binArea};
 }
 template <class T>

@@ -94,6 +94,8 @@ inline constexpr double kMaxSgSharpness = 1e6;
 // material, and a rig that frames it (FramingRig of the sphere about its
 // bounds' centre through its farthest vertex).
 Result<Scene> AssetScene(const std::filesystem::path& file);
+// The scene primitive of a placed mesh: its bounds as a and b.
+Primitive MeshPrimitive(std::shared_ptr<const PlacedMesh> mesh);
 // Looking at `centre` from 20 degrees above and 30 around, far enough that
 // the sphere of `radius` about it fills 90 % of the vertical field of view.
 CameraRig FramingRig(glm::dvec3 centre, double radius, double fov_y_deg);

@@ -484,8 +484,9 @@ Document BuildDocument(const std::vector<Group>& groups, const std::string& titl
       "measured (`highlight`: the reference's highlight mask). A reference passes its convergence check when "
       "`none` measured against it at N and at 2N samples per axis agrees within the spec's tolerances. Cost: "
       "dedicated benchmark renders, variants interleaved in one batch per device (the order reversed every "
-      "repetition), the geometric mean of the paired per-repetition time ratios to `none` of the same batch "
-      "with a Student-t 95 % interval, repetitions added until it is within ±3 % or the spec's cap was timed (" +
+      "repetition), the Hodges-Lehmann estimate of the paired per-repetition time ratios to `none` of the "
+      "same batch with a Wilcoxon signed-rank 95 % interval, each variant timed until its interval is within "
+      "±3 % or the spec's cap was reached (" +
       CostPrecisionCount(included) + "); on "
       "lavapipe this is CPU time. Beside it, a cost no timing noise touches: the kernel's static instruction "
       "count (its canonical SPIR-V, every function inlined) as a ratio to `none`'s, and the transcendental "

@@ -3,13 +3,19 @@
 // so costs come from dedicated renders at a benchmark size, every variant of
 // a batch interleaved repetition by repetition (a slow spell of the machine
 // then hits all of them alike), after a warm-up frame that takes the JIT.
-// Each ratio to `none` is the geometric mean of the paired per-repetition
-// ratios, with a Student-t 95 % interval on their logarithms; rounds of
-// repetitions are added until every interval is within the spec's precision
-// (±3 % by default) or the repetition cap is reached. The order of the
-// variants reverses every repetition (ABBA), so a drift within a repetition
-// does not favour the first. Beside the times, the kernel's static
-// instruction counts: a cost that does not depend on the device.
+// Each ratio to `none` is the Hodges-Lehmann estimate of the paired
+// per-repetition log ratios with a Wilcoxon signed-rank 95 % interval:
+// lavapipe's frame times carry rare slow frames (5-10 % of a frame's time
+// on an idle 2-core machine, far more under load), which widen a Student-t
+// interval by their square and a rank interval by one rank. A variant is
+// timed in rounds until its own interval is within the spec's precision
+// (±3 % by default) or the repetition cap is reached; `none` is timed in
+// every repetition that times any variant, so that the noisy ratios (short
+// frames beside a long `none`) get the repetitions and the precise ones stop
+// early. The order of the variants reverses every repetition (ABBA), so a
+// drift within a repetition does not favour the first. Beside the times,
+// the kernel's static instruction counts: a cost that does not depend on
+// the device.
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -33,6 +39,27 @@ double Median(std::vector<double> v) {
 
 }  // namespace
 
+int SignedRankCriticalRank(int n) {
+  if (n < 6) return 0;
+  const long long m = static_cast<long long>(n) * (n + 1) / 2;
+  if (n > 200) {
+    const double sd = std::sqrt(static_cast<double>(n) * (n + 1) * (2.0 * n + 1) / 24);
+    return static_cast<int>(std::max(1.0, std::floor(m / 2.0 - 1.959964 * sd)));
+  }
+  // ways[s]: the subsets of the ranks 1..n whose sum is s (the signed-rank
+  // statistic's null distribution times 2^n); k is the largest rank with
+  // P(T <= k - 1) <= 2.5 %.
+  std::vector<double> ways(static_cast<std::size_t>(m) + 1, 0.0);
+  ways[0] = 1;
+  for (int r = 1; r <= n; ++r)
+    for (long long s = m; s >= r; --s) ways[s] += ways[s - r];
+  const double total = std::ldexp(1.0, n);
+  double below = 0;
+  int k = 0;
+  while (k < m && (below + ways[k]) / total <= 0.025) below += ways[k++];
+  return k;
+}
+
 RatioEstimate PairedRatio(const std::vector<double>& test_ms, const std::vector<double>& none_ms) {
   RatioEstimate r;
   std::vector<double> d;
@@ -40,16 +67,17 @@ RatioEstimate PairedRatio(const std::vector<double>& test_ms, const std::vector<
     if (test_ms[i] > 0 && none_ms[i] > 0) d.push_back(std::log(test_ms[i] / none_ms[i]));
   r.n = static_cast<int>(d.size());
   if (d.empty()) return r;
-  double mean = 0;
-  for (double x : d) mean += x;
-  mean /= r.n;
-  r.ratio = std::exp(mean);
-  if (r.n < 2) return r;
-  double ss = 0;
-  for (double x : d) ss += (x - mean) * (x - mean);
-  const double half = StudentT975(r.n - 1) * std::sqrt(ss / (r.n - 1) / r.n);
-  r.lo = std::exp(mean - half);
-  r.hi = std::exp(mean + half);
+  // The Walsh averages (d_i + d_j) / 2, i <= j.
+  std::vector<double> walsh;
+  walsh.reserve(d.size() * (d.size() + 1) / 2);
+  for (std::size_t i = 0; i < d.size(); ++i)
+    for (std::size_t j = i; j < d.size(); ++j) walsh.push_back(0.5 * (d[i] + d[j]));
+  std::sort(walsh.begin(), walsh.end());
+  r.ratio = std::exp(Median(walsh));
+  if (const int k = SignedRankCriticalRank(r.n); k > 0) {
+    r.lo = std::exp(walsh[k - 1]);
+    r.hi = std::exp(walsh[walsh.size() - k]);
+  }
   return r;
 }
 
@@ -93,9 +121,10 @@ std::string BenchmarkKernels(const BenchmarkBatch& batch, std::size_t k) {
     auto sources = SourcesOf(job);
     return sources ? sources->test.kernel : std::string("unresolved");
   };
-  // "paired-2": the ABBA-interleaved paired ratios with intervals and
-  // instruction counts; costs timed the older way are timed again.
-  return Fnv1a64Hex(kernel(batch.jobs[k]) + '\0' + kernel(batch.jobs.front()) + '\0' + "paired-2");
+  // "signed-rank-1": the ABBA-interleaved paired ratios with signed-rank
+  // intervals, each variant timed until its own is precise; costs timed the
+  // older ways are timed again.
+  return Fnv1a64Hex(kernel(batch.jobs[k]) + '\0' + kernel(batch.jobs.front()) + '\0' + "signed-rank-1");
 }
 
 Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, const BenchmarkOptions& bench,
@@ -121,27 +150,35 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
     if (!counted) return Prefixed("instruction counts of " + job.variant, counted.failure());
     census.push_back(*counted);
   }
-  std::vector<std::vector<double>> ms(renderers.size());
+  // ms[k]: variant k's times; paired[k]: `none`'s time in the same
+  // repetitions (for k = 0, every repetition's).
+  const std::size_t count = renderers.size();
+  std::vector<std::vector<double>> ms(count), paired(count);
+  std::vector<bool> timing(count, true);
   const int frames = batch.jobs.front().frames;
   const int round = std::max(bench.repetitions, 2);
-  auto precise = [&] {
-    for (std::size_t k = 1; k < renderers.size(); ++k)
-      if (!PairedRatio(ms[k], ms.front()).Within(bench.precision)) return false;
-    return true;
-  };
   int reps = 0;
-  do {
-    for (int r = 0; r < round; ++r, ++reps) {
+  auto any_timing = [&] { return std::find(timing.begin() + 1, timing.end(), true) != timing.end(); };
+  while (reps < bench.max_repetitions && (reps == 0 || any_timing())) {
+    for (int r = 0; r < round && reps < bench.max_repetitions; ++r, ++reps) {
       // Frames spread over the path by the golden ratio, the same for every variant.
       const int frame = static_cast<int>(std::fmod(reps * 0.6180339887, 1.0) * frames) % std::max(frames, 1);
-      for (std::size_t i = 0; i < renderers.size(); ++i) {
-        const std::size_t k = reps % 2 ? renderers.size() - 1 - i : i;
+      double none_ms = 0;
+      std::vector<double> now(count, 0.0);
+      for (std::size_t i = 0; i < count; ++i) {
+        const std::size_t k = reps % 2 ? count - 1 - i : i;
+        if (!timing[k]) continue;
         auto f = renderers[k]->RenderFrame(frame);
         if (!f) return Prefixed("benchmark of " + batch.jobs[k].variant, f.failure());
-        ms[k].push_back(f->gpu_ms);
+        now[k] = f->gpu_ms;
+        if (k == 0) none_ms = f->gpu_ms;
       }
+      for (std::size_t k = 0; k < count; ++k)
+        if (timing[k]) ms[k].push_back(now[k]), paired[k].push_back(none_ms);
     }
-  } while (reps < bench.max_repetitions && !precise());
+    for (std::size_t k = 1; k < count; ++k)
+      if (timing[k] && PairedRatio(ms[k], paired[k]).Within(bench.precision)) timing[k] = false;
+  }
   std::vector<BenchmarkCost> costs;
   const double none_ms = Median(ms.front());
   for (std::size_t k = 0; k < renderers.size(); ++k) {
@@ -155,12 +192,13 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
     c.camera = job.camera;
     c.width = bench.width;
     c.height = bench.height;
-    c.repetitions = reps;
+    c.repetitions = static_cast<int>(ms[k].size());
     c.median_ms = Median(ms[k]);
     c.min_ms = *std::min_element(ms[k].begin(), ms[k].end());
     c.max_ms = *std::max_element(ms[k].begin(), ms[k].end());
     c.none_median_ms = none_ms;
-    const RatioEstimate ratio = k == 0 ? RatioEstimate{1, 1, 1, reps} : PairedRatio(ms[k], ms.front());
+    const RatioEstimate ratio =
+        k == 0 ? RatioEstimate{1, 1, 1, static_cast<int>(ms[0].size())} : PairedRatio(ms[k], paired[k]);
     c.ratio_to_none = ratio.ratio;
     c.ratio_lo = ratio.lo;
     c.ratio_hi = ratio.hi;

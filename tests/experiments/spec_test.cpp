@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "shimmer/experiments/job.h"
+#include "shimmer/experiments/minimize.h"
 #include "shimmer/experiments/runner.h"
 #include "shimmer/experiments/spec.h"
 
@@ -401,7 +402,7 @@ TEST(Spec, ReferenceReplicatesConvergenceAndBenchmarkParse) {
   EXPECT_EQ(d->benchmark.width, 512);
   EXPECT_EQ(d->benchmark.repetitions, 5);
   EXPECT_DOUBLE_EQ(d->benchmark.precision, 0.03);
-  EXPECT_EQ(d->benchmark.max_repetitions, 60);
+  EXPECT_EQ(d->benchmark.max_repetitions, 100);
   auto off = ParseSpec(TrustSpec(",\n  \"benchmark\": false"), "v.json");
   ASSERT_TRUE(off) << off.error();
   EXPECT_FALSE(off->benchmark.enabled);
@@ -454,29 +455,62 @@ TEST(Spec, ReferenceSppByMaterialGivesSharpMaterialsTheirOwnSampleCount) {
   }
 }
 
-TEST(Spec, PairedCostRatiosCarryAStudentTInterval) {
+TEST(Spec, SignedRankCriticalRanksMatchTheWilcoxonTable) {
+  // Two-sided 5 % critical values of the signed-rank statistic (Wilcoxon's
+  // table: T <= 0, 2, 8, 52 rejects at n = 6, 7, 10, 20), plus one.
+  EXPECT_EQ(SignedRankCriticalRank(5), 0);  // no 95 % interval from 5 pairs: 2/32 > 5 %
+  EXPECT_EQ(SignedRankCriticalRank(6), 1);
+  EXPECT_EQ(SignedRankCriticalRank(7), 3);
+  EXPECT_EQ(SignedRankCriticalRank(10), 9);
+  EXPECT_EQ(SignedRankCriticalRank(20), 53);
+  // The normal approximation takes over past 200 pairs without a jump.
+  const double exact = SignedRankCriticalRank(200), approximate = SignedRankCriticalRank(201);
+  EXPECT_GT(approximate, exact);
+  EXPECT_LT(approximate / exact, 1.02);
+}
+
+TEST(Spec, PairedCostRatiosCarryASignedRankInterval) {
   // Exact ratios: no spread, a zero-width interval.
-  RatioEstimate exact = PairedRatio({12, 24, 36}, {10, 20, 30});
+  RatioEstimate exact = PairedRatio({12, 24, 36, 48, 60, 72}, {10, 20, 30, 40, 50, 60});
   EXPECT_NEAR(exact.ratio, 1.2, 1e-12);
   EXPECT_NEAR(exact.lo, 1.2, 1e-12);
   EXPECT_NEAR(exact.hi, 1.2, 1e-12);
   EXPECT_TRUE(exact.Within(0.03));
-  // log ratios 0.1, 0.2, 0.3: mean 0.2, sd 0.1, t(2) = 4.303.
-  RatioEstimate spread = PairedRatio({std::exp(0.1), std::exp(0.2), std::exp(0.3)}, {1, 1, 1});
-  EXPECT_EQ(spread.n, 3);
-  EXPECT_NEAR(spread.ratio, std::exp(0.2), 1e-12);
-  EXPECT_NEAR(spread.lo, std::exp(0.2 - 4.303 * 0.1 / std::sqrt(3.0)), 1e-9);
-  EXPECT_NEAR(spread.hi, std::exp(0.2 + 4.303 * 0.1 / std::sqrt(3.0)), 1e-9);
+  // Log ratios 0.1 .. 0.6: the Walsh averages' median is 0.35; with n = 6
+  // the interval is their extremes, 0.1 and 0.6.
+  std::vector<double> test;
+  for (double d : {0.1, 0.2, 0.3, 0.4, 0.5, 0.6}) test.push_back(std::exp(d));
+  RatioEstimate spread = PairedRatio(test, std::vector<double>(6, 1.0));
+  EXPECT_EQ(spread.n, 6);
+  EXPECT_NEAR(spread.ratio, std::exp(0.35), 1e-12);
+  EXPECT_NEAR(spread.lo, std::exp(0.1), 1e-12);
+  EXPECT_NEAR(spread.hi, std::exp(0.6), 1e-12);
   EXPECT_FALSE(spread.Within(0.03));
   // Pairing: a common drift (the machine slowing) cancels.
-  RatioEstimate drift = PairedRatio({1.1, 2.2, 4.4, 8.8}, {1, 2, 4, 8});
+  RatioEstimate drift = PairedRatio({1.1, 2.2, 4.4, 8.8, 17.6, 35.2}, {1, 2, 4, 8, 16, 32});
   EXPECT_NEAR(drift.lo, 1.1, 1e-12);
   EXPECT_NEAR(drift.hi, 1.1, 1e-12);
-  // One pair: a point, no interval.
-  RatioEstimate one = PairedRatio({2}, {1});
-  EXPECT_DOUBLE_EQ(one.ratio, 2);
-  EXPECT_EQ(one.hi, 0);
-  EXPECT_FALSE(one.Within(0.5));
+  // Robust to a slow frame: 29 pairs within ±1 % of 1.1 and one pair whose
+  // variant frame a slow spell tripled. The rank interval stays within
+  // ±3 %; the mean of the logs with its t interval would not.
+  std::vector<double> variant, none;
+  for (int i = 0; i < 30; ++i) {
+    none.push_back(100);
+    variant.push_back(110 * (1 + 0.01 * std::sin(1.7 * i)));
+  }
+  variant[17] *= 3;
+  RatioEstimate robust = PairedRatio(variant, none);
+  EXPECT_NEAR(robust.ratio, 1.1, 0.01);
+  EXPECT_TRUE(robust.Within(0.03)) << robust.lo << " " << robust.hi;
+  double mean = 0, squares = 0;
+  for (int i = 0; i < 30; ++i) mean += std::log(variant[i] / none[i]) / 30;
+  for (int i = 0; i < 30; ++i) squares += std::pow(std::log(variant[i] / none[i]) - mean, 2);
+  EXPECT_GT(StudentT975(29) * std::sqrt(squares / 29 / 30), std::log(1.03));
+  // Fewer than 6 pairs: an estimate, no interval.
+  RatioEstimate few = PairedRatio({2, 2, 2}, {1, 1, 1});
+  EXPECT_DOUBLE_EQ(few.ratio, 2);
+  EXPECT_EQ(few.hi, 0);
+  EXPECT_FALSE(few.Within(0.5));
 }
 
 TEST(Spec, BenchmarkBatchesHoldEveryVariantOfAScenesDerivativeSourceWithNoneFirst) {

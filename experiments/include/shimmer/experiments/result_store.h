@@ -63,7 +63,7 @@ struct BenchmarkCost {
   int width = 0, height = 0, repetitions = 0;
   double median_ms = 0, min_ms = 0, max_ms = 0;  // GPU ms per frame over the repetitions
   double none_median_ms = 0;                     // `none` in the same batch
-  // The geometric mean of the paired per-repetition ratios to `none` and its
+  // The paired per-repetition ratio to `none` (Hodges-Lehmann) and its
   // 95 % interval (RatioEstimate). Older rows: median_ms / none_median_ms
   // and no interval (ratio_lo = ratio_hi = 0).
   double ratio_to_none = 0, ratio_lo = 0, ratio_hi = 0;

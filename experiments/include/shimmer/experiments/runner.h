@@ -118,15 +118,23 @@ Result<RunPlan> PlanRun(const std::vector<Job>& jobs, const RunOptions& options)
 
 // Renders every job of `batch` at the benchmark size, interleaved, after one
 // warm-up frame each; GPU ms per frame from the renderer's timestamps.
-// A ratio of GPU times to `none`'s from paired repetitions: the geometric
-// mean of the per-repetition ratios and the Student-t 95 % interval of their
-// logarithms (lo = hi = 0 with fewer than two pairs).
+// A ratio of GPU times to `none`'s from paired repetitions: the
+// Hodges-Lehmann estimate of the per-repetition log ratios (the median of
+// their pairwise means) and the Wilcoxon signed-rank 95 % interval about it
+// (lo = hi = 0 with fewer than two pairs). Distribution-free: a frame that a
+// slow spell of the machine hit moves the interval by one rank, not by its
+// size, where a Student-t interval widens with its square.
 struct RatioEstimate {
   double ratio = 0, lo = 0, hi = 0;
   int n = 0;
   // The interval lies within ±precision of the ratio.
   bool Within(double precision) const { return n >= 2 && hi <= ratio * (1 + precision) && lo >= ratio * (1 - precision); }
 };
+// The rank k (1-based) such that [W_(k), W_(M+1-k)] of the M = n(n+1)/2
+// sorted Walsh averages is the two-sided signed-rank interval of coverage at
+// least 95 % (exact distribution up to n = 200, normal approximation beyond);
+// 0 where n is too small for any interval (n < 6).
+int SignedRankCriticalRank(int n);
 RatioEstimate PairedRatio(const std::vector<double>& test_ms, const std::vector<double>& none_ms);
 
 Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, const BenchmarkOptions& bench,

@@ -212,8 +212,9 @@ void AddMetricsCommand(CLI::App& app) {
   cmd->add_option("--signal", o->signal, "Spectrum of: error (T - R, default with REF) or test");
   cmd->add_option("--segment", o->segment, "Welch segment length L (default min(frames, 64))");
   cmd->add_option("--sparkle-threshold", o->sparkle_threshold,
-                  "Sparkle statistics: pixels whose linear Y exceeds this per frame, their variance over time and "
-                  "lifetime along the motion vectors (default 0: off)");
+                  "Sparkle statistics: pixels whose Y exceeds this many times their neighbourhood's mean (a "
+                  "contrast), counted per frame, their variance over time and lifetime along the motion vectors "
+                  "(default 0: off)");
   cmd->add_option("--out", o->out, "Directory for maps (EXR + PNG heatmaps), spectrum CSV/plot, metrics.json");
   cmd->add_option("--video", o->video,
                   "Write an MP4: labelled reference and test, the signed error below the test, a legend (see "

@@ -31,6 +31,9 @@ struct RunCliOptions {
 void PrintPlan(const std::string& spec, const std::string& shard, const experiments::RunPlan& plan) {
   std::printf("%s: %zu jobs in shard %s would run, %d are done\n", spec.c_str(),
               plan.to_run.size(), shard.c_str(), plan.done);
+  if (!plan.to_rekey.empty())
+    std::printf("%s: %zu stored rows would be re-keyed, not measured again: %s\n", spec.c_str(),
+                plan.to_rekey.size(), experiments::kRekeyReason);
   for (const experiments::PlannedJob& p : plan.to_run) {
     std::string why;
     for (const std::string& w : p.why) why += (why.empty() ? "" : "; ") + w;
@@ -102,6 +105,9 @@ void Run(const RunCliOptions& o) {
     std::printf("%s: %d shot references checked at twice the samples per axis, %d unconverged\n", spec.name.c_str(),
                 s.shots_checked, s.shots_unconverged);
   if (s.benchmarks) std::printf("%s: %d benchmark batches timed\n", spec.name.c_str(), s.benchmarks);
+  if (s.rekeyed)
+    std::printf("%s: %d stored rows re-keyed, not measured again: %s\n", spec.name.c_str(), s.rekeyed,
+                experiments::kRekeyReason);
   if (s.traits_added)
     std::printf("%s: %d stored rows given their scene's traits (the report classes shots by them)\n",
                 spec.name.c_str(), s.traits_added);

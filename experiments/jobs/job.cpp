@@ -274,7 +274,7 @@ Result<render::RenderFingerprint> ReferenceFingerprint(const Job& job) {
 
 Result<JobSources> ComputeSources(const Job& job) {
   JobSources sources;
-  sources.metrics = std::string(metrics::MetricsCodeVersion());
+  sources.metrics = MetricsVersionOf(job);
   if (job.external) return sources;
   auto test = RenderSettingsOf(job);
   if (!test) return test.failure();
@@ -340,6 +340,30 @@ json FingerprintJson(const render::RenderFingerprint& f) { return {{"kernel", f.
 std::string Hash(const json& j) { return Fnv1a64Hex(j.dump()); }
 
 }  // namespace
+
+std::string MetricsVersionOf(const Job& job) {
+  std::string version(metrics::MetricsCodeVersion());
+  if (job.metrics.sparkle_threshold > 0) version += "+sparkles:" + std::string(metrics::SparkleCodeVersion());
+  return version;
+}
+
+// The metrics code of commit 3e90d26, the last before the split: all of it
+// hashed to `before`; without the sparkle statistics, to `core`; they alone, to `sparkles`.
+const MetricsVersionSplit kMetricsVersionSplit = {"f7c6fc8c154db46e", "e9101a0d4dc05f76", "96718ce91922da87"};
+
+bool MeasuredByTodaysMetrics(std::string_view stored, const Job& job, std::string_view core_now,
+                             std::string_view sparkles_now, const MetricsVersionSplit& split) {
+  const bool sparkles = job.metrics.sparkle_threshold > 0;
+  std::string today(core_now);
+  if (sparkles) today += "+sparkles:" + std::string(sparkles_now);
+  if (stored == today) return true;
+  return stored == split.before && core_now == split.core && (!sparkles || sparkles_now == split.sparkles);
+}
+
+bool Rekeyable(const Job& job, const JobSources& stored, const JobSources& now) {
+  return WhyRerun(job, stored, now) == std::vector<std::string>{"metrics version changed"} &&
+         MeasuredByTodaysMetrics(stored.metrics, job, metrics::MetricsCodeVersion(), metrics::SparkleCodeVersion());
+}
 
 Result<JobSources> SourcesOf(const Job& job) {
   const std::string key = job.ToJson().dump();

@@ -382,6 +382,14 @@ Result<RunPlan> PlanRun(const std::vector<Job>& all_jobs, const RunOptions& opti
       // What changed since the closest stored version: a row with sources
       // before a legacy one (it says more), then the fewest reasons.
       std::pair<bool, std::size_t> closest{true, std::numeric_limits<std::size_t>::max()};
+      const bool rekey = std::any_of(it->second.begin(), it->second.end(), [&](const JobResult* stored) {
+        return !stored->sources.is_null() && Rekeyable(job, JobSources::FromJson(stored->sources), *now);
+      });
+      if (rekey) {
+        planned.why = {kRekeyReason};
+        plan.to_rekey.push_back(std::move(planned));
+        continue;
+      }
       for (const JobResult* stored : it->second) {
         const bool legacy = stored->sources.is_null();
         std::vector<std::string> why = legacy ? std::vector<std::string>{kLegacyRowReason}
@@ -439,6 +447,32 @@ Status GiveSceneTraits(ResultStore& store, const Job& job, const std::string& id
   return Ok();
 }
 
+// Stores a copy of a row of `job` under `id` where the store holds one that
+// today's code would measure alike (Rekeyable); whether it did. `stored`:
+// the store's rows by description, read once.
+Result<bool> RekeyRow(ResultStore& store, const Job& job, const std::string& id,
+                      std::optional<std::map<std::string, std::vector<JobResult>>>& stored) {
+  if (!stored) {
+    auto all = store.All();
+    if (!all) return all.failure();
+    stored.emplace();
+    for (JobResult& r : *all) (*stored)[JobDescription(r.job)].push_back(std::move(r));
+  }
+  const auto it = stored->find(JobDescription(job));
+  if (it == stored->end()) return false;
+  const auto now = SourcesOf(job);
+  if (!now) return now.failure();
+  for (const JobResult& row : it->second) {
+    if (row.sources.is_null() || !Rekeyable(job, JobSources::FromJson(row.sources), *now)) continue;
+    JobResult copy = row;
+    copy.id = id;
+    copy.sources = now->ToJson();
+    if (Status inserted = store.Insert(copy); !inserted) return inserted.failure();
+    return true;
+  }
+  return false;
+}
+
 // The state the workers of one run share; `mutex` guards the store, the
 // summary and the progress.
 struct JobWorkers {
@@ -455,6 +489,7 @@ struct JobWorkers {
   double computed_s = 0;
   std::atomic<std::size_t> next{0};
   std::atomic<bool> failed{false};
+  std::optional<std::map<std::string, std::vector<JobResult>>> stored_rows{};  // for RekeyRow
 
   // The first failure ends the run; the others are dropped.
   void Stop(const std::string& job, const Error& e) {
@@ -509,6 +544,10 @@ struct JobWorkers {
         // classes shots from the store, not from scene files.
         if (done && *done && !job.external)
           if (Status given = GiveSceneTraits(store, job, id, &summary.traits_added); !given) done = given.failure();
+        if (done && !*done) {
+          done = RekeyRow(store, job, id, stored_rows);
+          if (done && *done) ++summary.rekeyed;
+        }
       }
       if (!done) return Stop(who, done.failure());
       double seconds = 0;

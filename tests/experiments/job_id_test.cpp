@@ -19,6 +19,7 @@
 #include "shimmer/experiments/result_store.h"
 #include "shimmer/experiments/runner.h"
 #include "shimmer/experiments/spec.h"
+#include "shimmer/metrics/metrics_version.h"
 #include "shimmer/renderer/scene.h"
 #include "shimmer/shading/shading.h"
 #include "test_hooks.h"
@@ -257,6 +258,90 @@ TEST_F(JobIds, DryRunSaysWhyAndAStoreFromBeforeRerunsOnce) {
   ASSERT_TRUE(fresh) << fresh.error();
   EXPECT_EQ(fresh->to_run.size(), jobs_.size());
   EXPECT_FALSE(fs::exists(options.db_path));
+}
+
+TEST(MetricsVersions, OnlyRowsWithSparkleStatisticsCarryTheSparkleCodesVersion) {
+  Job job;
+  job.metrics.sparkle_threshold = 0;
+  EXPECT_EQ(MetricsVersionOf(job), std::string(metrics::MetricsCodeVersion()));
+  job.metrics.sparkle_threshold = 3;
+  EXPECT_EQ(MetricsVersionOf(job),
+            std::string(metrics::MetricsCodeVersion()) + "+sparkles:" + std::string(metrics::SparkleCodeVersion()));
+  EXPECT_NE(metrics::MetricsCodeVersion(), metrics::SparkleCodeVersion());
+}
+
+TEST(MetricsVersions, ARowOfTheVersionBeforeTheSplitWasMeasuredByTodaysCodeOnlyWhileThatCodeIsUnchanged) {
+  const MetricsVersionSplit split{"whole", "core", "sparkles"};
+  Job plain, glints;
+  glints.metrics.sparkle_threshold = 3;
+  // Today's own versions.
+  EXPECT_TRUE(MeasuredByTodaysMetrics("core", plain, "core", "sparkles", split));
+  EXPECT_TRUE(MeasuredByTodaysMetrics("core+sparkles:s2", glints, "core", "s2", split));
+  EXPECT_FALSE(MeasuredByTodaysMetrics("core", glints, "core", "sparkles", split));
+  // A row of the whole version: today's code is the split's.
+  EXPECT_TRUE(MeasuredByTodaysMetrics("whole", plain, "core", "sparkles", split));
+  EXPECT_TRUE(MeasuredByTodaysMetrics("whole", glints, "core", "sparkles", split));
+  // The sparkle code edited since: the rows with sparkles only are measured again.
+  EXPECT_TRUE(MeasuredByTodaysMetrics("whole", plain, "core", "s2", split));
+  EXPECT_FALSE(MeasuredByTodaysMetrics("whole", glints, "core", "s2", split));
+  // The rest of the metrics code edited since: every row.
+  EXPECT_FALSE(MeasuredByTodaysMetrics("whole", plain, "core2", "sparkles", split));
+  EXPECT_FALSE(MeasuredByTodaysMetrics("whole", glints, "core2", "sparkles", split));
+  // Any other version.
+  EXPECT_FALSE(MeasuredByTodaysMetrics("older", plain, "core", "sparkles", split));
+}
+
+TEST_F(JobIds, RowsMeasuredByTodaysMetricsCodeUnderTheVersionBeforeTheSplitAreReKeyedNotRerun) {
+  const fs::path db = files_.dir / "split.db";
+  std::vector<Job> jobs(jobs_.begin(), jobs_.begin() + 2);
+  {
+    auto store = ResultStore::Open(db.string());
+    ASSERT_TRUE(store) << store.error();
+    for (const Job& job : jobs) {
+      JobResult r;
+      r.job = job;
+      JobSources sources = SourcesOf(job).value();
+      sources.metrics = std::string(kMetricsVersionSplit.before);
+      r.id = JobIdFrom(job, sources);
+      r.reference_id = ReferenceIdFrom(job, sources);
+      r.sources = sources.ToJson();
+      r.metrics = {{"tv_err", 1.5}};
+      ASSERT_TRUE((*store)->Insert(r));
+    }
+  }
+  RunOptions options;
+  options.db_path = db.string();
+  options.work_dir = (files_.dir / "frames").string();
+  options.check_shots = false;
+  const auto plan = PlanRun(jobs, options);
+  ASSERT_TRUE(plan) << plan.error();
+  const bool unchanged = metrics::MetricsCodeVersion() == kMetricsVersionSplit.core;
+  if (!unchanged) {
+    // The metrics code moved on since the split: the rows are measured once more.
+    ASSERT_EQ(plan->to_run.size(), 2u);
+    EXPECT_EQ(plan->to_run[0].why, (std::vector<std::string>{"metrics version changed"}));
+    return;
+  }
+  EXPECT_TRUE(plan->to_run.empty());
+  ASSERT_EQ(plan->to_rekey.size(), 2u);
+  EXPECT_EQ(plan->to_rekey[0].why, (std::vector<std::string>{kRekeyReason}));
+  // The run copies each row under today's id, measuring nothing.
+  const RunSummary summary = RunJobs(jobs, options);
+  ASSERT_FALSE(summary.error) << summary.error->message;
+  EXPECT_EQ(summary.rekeyed, 2);
+  EXPECT_EQ(summary.computed, 0);
+  auto store = ResultStore::Open(db.string(), ResultStore::Mode::kReadOnly);
+  ASSERT_TRUE(store) << store.error();
+  for (const Job& job : jobs) {
+    auto row = (*store)->Get(JobId(job));
+    ASSERT_TRUE(row && *row);
+    EXPECT_EQ((**row).metrics.at("tv_err"), 1.5);
+    EXPECT_EQ(JobSources::FromJson((**row).sources).metrics, MetricsVersionOf(job));
+  }
+  const auto again = PlanRun(jobs, options);
+  ASSERT_TRUE(again) << again.error();
+  EXPECT_EQ(again->done, 2);
+  EXPECT_TRUE(again->to_rekey.empty());
 }
 
 }  // namespace

@@ -674,7 +674,7 @@ TEST(RunCli, FilteredGlintsFlickerLessThanTheNaiveSparkleUnderDolly) {
     "size": [48, 48],
     "frames": 10,
     "reference": {"spp": 6},
-    "metrics": {"highlight_mask": false, "sparkle_threshold": 4}
+    "metrics": {"highlight_mask": false, "sparkle_threshold": 3}
   })";
   ASSERT_EQ(std::system(("cd " + dir.string() + " && " + SHIMMER_EXE +
                          " run glints.json --no-check --no-benchmark --db g.db --work g >log.txt 2>&1")

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "shimmer/metrics/metrics_report.h"
+#include "shimmer/metrics/sparkle_statistics.h"
 #include "test_sequences.h"
 
 namespace shimmer::metrics {
@@ -18,7 +19,8 @@ using testing::WriteExrMats;
 using testing::WriteSequence;
 
 constexpr float kDark = 0.1f, kBright = 5.0f;
-constexpr double kTau = 1.0;
+// A sparkle stands out of its neighbourhood by more than this (kBright / kDark is 50).
+constexpr double kTau = 4.0;
 
 SequenceSpec Spec(int frames, testing::PixelFunction f) {
   SequenceSpec s;
@@ -52,13 +54,13 @@ bool HasWarning(const MetricsReport& r, const std::string& part) {
   return false;
 }
 
-// count_t pixels of row 2 are bright in frame t; one more pixel sits exactly
-// at tau (not above it) in every frame and never counts.
+// count_t pixels of row 2 are bright in frame t; one more pixel, brighter
+// than its neighbourhood by less than the contrast, never counts.
 TEST(SparkleStatistics, CountPatternGivesExactMeanAndPopulationVariance) {
   const std::vector<long long> pattern = {1, 3, 0, 2, 4, 2};
   TempDir dir;
   WriteSequence(dir / "test", Spec(6, [&](int t, int x, int y) {
-                  if (x == 15 && y == 15) return static_cast<float>(kTau);
+                  if (x == 15 && y == 15) return static_cast<float>(0.9 * kTau * kDark);
                   return y == 2 && x < pattern[t] ? kBright : kDark;
                 }));
   MetricsReport r = Measure({.test = dir / "test", .sparkle_threshold = kTau});
@@ -293,6 +295,84 @@ TEST(SparkleStatistics, OffLeavesTheReportAsItWas) {
   EXPECT_TRUE(alone.contains("test"));
   for (const char* key : {"reference", "mean_count_ratio", "count_variance_ratio", "lifetime_ratio"})
     EXPECT_FALSE(alone.contains(key)) << key;
+}
+
+// The count is a contrast: the same frames at any exposure give the same
+// sparkles, and so do frames whose shading is scaled across the picture.
+TEST(SparkleStatistics, ScalingTheLuminanceLeavesTheCountsAsTheyAre) {
+  auto field = [](double scale, double slope) {
+    return [=](int t, int x, int y) {
+      const double shading = scale * (1 + slope * x);  // a smooth level, as D_g's
+      const bool glint = (x * 7 + y * 13 + t * 5) % 11 == 0;
+      return static_cast<float>(shading * (glint ? 10.0 : 1.0));
+    };
+  };
+  TempDir dir;
+  WriteSequence(dir / "base", Spec(5, field(1.0, 0.0)));
+  const std::vector<long long> counts = TestSide(Measure({.test = dir / "base", .sparkle_threshold = kTau})).counts;
+  ASSERT_EQ(counts.size(), 5u);
+  EXPECT_GT(counts[0], 10);
+  for (double scale : {1e-3, 1e3}) {
+    TempDir scaled;
+    WriteSequence(scaled / "test", Spec(5, field(scale, 0.0)));
+    EXPECT_EQ(TestSide(Measure({.test = scaled / "test", .sparkle_threshold = kTau})).counts, counts) << scale;
+  }
+  // A shading ramp of 4 % per pixel moves no pixel across the contrast of 4
+  // against a glint of 10 times its level.
+  TempDir ramp;
+  WriteSequence(ramp / "test", Spec(5, field(1.0, 0.04)));
+  EXPECT_EQ(TestSide(Measure({.test = ramp / "test", .sparkle_threshold = kTau})).counts, counts);
+}
+
+// Smooth shading has no sparkle at any level; a glint on it does.
+TEST(SparkleStatistics, SmoothShadingHasNoSparklesButAGlintOnItDoes) {
+  auto highlight = [](int x, int y) {
+    const double dx = x - 7.5, dy = y - 7.5;
+    return 0.05 + 20.0 * std::exp(-(dx * dx + dy * dy) / 18.0);  // 400 times its surround, as wide as a neighbourhood
+  };
+  TempDir dir;
+  WriteSequence(dir / "smooth", Spec(3, [&](int, int x, int y) { return static_cast<float>(highlight(x, y)); }));
+  EXPECT_EQ(TestSide(Measure({.test = dir / "smooth", .sparkle_threshold = kTau})).counts,
+            (std::vector<long long>{0, 0, 0}));
+  WriteSequence(dir / "glint", Spec(3, [&](int, int x, int y) {
+                  return static_cast<float>(highlight(x, y) * (x == 2 && y == 3 ? 30.0 : 1.0));
+                }));
+  EXPECT_EQ(TestSide(Measure({.test = dir / "glint", .sparkle_threshold = kTau})).counts,
+            (std::vector<long long>{1, 1, 1}));
+}
+
+// The region's edge is not a contrast: pixels outside it do not darken a
+// neighbourhood. A bright square region on black shows no sparkle.
+TEST(SparkleStatistics, TheRegionsEdgeIsNoSparkle) {
+  TempDir dir;
+  WriteSequence(dir / "test", Spec(2, [](int, int x, int y) {
+                  return x >= 4 && x < 12 && y >= 4 && y < 12 ? kBright : 0.0f;
+                }));
+  cv::Mat mask = cv::Mat::zeros(16, 16, CV_32F);
+  mask(cv::Rect(4, 4, 8, 8)) = 1.0f;
+  ASSERT_TRUE(WriteExrMats(dir / "mask.exr", {{"Y", mask}}));
+  EXPECT_EQ(TestSide(Measure({.test = dir / "test", .mask_file = dir / "mask.exr", .sparkle_threshold = kTau}))
+                .counts,
+            (std::vector<long long>{0, 0}));
+}
+
+// On a black background a speck's neighbourhood mean is 0: the floor (a
+// share of the frame's mean) decides. A third of a 48-pixel-wide frame at
+// 1, the rest black: the floor is 0.05 / 3, so a speck must be above 4 times
+// that, 0.0667.
+TEST(SparkleStatistics, ASpeckOnBlackMustClearTheFloor) {
+  for (auto [speck, counted] : {std::pair{0.05f, 0LL}, std::pair{0.1f, 1LL}}) {
+    TempDir dir;
+    SequenceSpec s = Spec(2, [speck = speck](int, int x, int y) {
+      if (x < 16) return 1.0f;
+      return x == 40 && y == 8 ? speck : 0.0f;
+    });
+    s.width = 48;
+    WriteSequence(dir / "test", s);
+    const auto counts = TestSide(Measure({.test = dir / "test", .sparkle_threshold = kTau})).counts;
+    EXPECT_EQ(counts, (std::vector<long long>{counted, counted})) << speck;
+  }
+  EXPECT_NEAR(kSparkleFloorShare, 0.05, 1e-12);  // the figure the comment above uses
 }
 
 TEST(SparkleStatistics, NegativeOrNonFiniteThresholdIsRefused) {

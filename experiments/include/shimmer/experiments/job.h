@@ -106,6 +106,31 @@ struct JobSources {
   nlohmann::json ToJson() const;
   static JobSources FromJson(const nlohmann::json& j);  // empty fields where `j` lacks them
 };
+// The metrics version a job's row carries (JobSources::metrics): the
+// metrics code's, and the sparkle statistics' code where the job computes
+// them, so that a change to the sparkle statistics re-measures the rows
+// that have them and no other.
+std::string MetricsVersionOf(const Job& job);
+
+// Rows measured before the sparkle statistics had a version of their own
+// carry the version of all the metrics code of that time, `before`. That
+// same code's non-sparkle part hashes to `core` and its sparkle part to
+// `sparkles`. So a stored row of `before` was measured by today's code when
+// today's metrics code hashes to `core` and, for a row with sparkle
+// statistics, today's sparkle code to `sparkles`: `shimmer run` re-keys such
+// a row rather than measuring it again. The first edit of that code ends the
+// equivalence, and rows of `before` are then measured once more.
+struct MetricsVersionSplit {
+  std::string_view before, core, sparkles;
+};
+extern const MetricsVersionSplit kMetricsVersionSplit;
+bool MeasuredByTodaysMetrics(std::string_view stored, const Job& job, std::string_view core_now,
+                             std::string_view sparkles_now, const MetricsVersionSplit& split = kMetricsVersionSplit);
+// A stored row of `job` that today's code would give the same numbers under
+// another id: its sources differ from `now` in the metrics version only,
+// and MeasuredByTodaysMetrics holds.
+bool Rekeyable(const Job& job, const JobSources& stored, const JobSources& now);
+
 // The sources of `job` as this shimmer would run it, kept per process. An
 // external sequence has none (its frames' content hashes are in the job).
 Result<JobSources> SourcesOf(const Job& job);

@@ -48,6 +48,7 @@ struct RunSummary {
   int shots_checked = 0, shots_unconverged = 0;  // checks run by this run, and how many failed
   int benchmarks = 0;                            // batches timed by this run
   int traits_added = 0;                          // stored rows given their scene's traits (SceneTraits)
+  int rekeyed = 0;                               // stored rows re-keyed, not measured again (Rekeyable)
   std::optional<Error> error;                    // set when a job failed; the jobs before it are stored
 };
 
@@ -110,10 +111,13 @@ struct PlannedJob {
 };
 struct RunPlan {
   std::vector<PlannedJob> to_run;
+  std::vector<PlannedJob> to_rekey;  // a stored row today's code would measure alike (Rekeyable)
   int done = 0;
   std::size_t legacy_rows = 0;  // rows of the store from before per-kernel ids
 };
 inline constexpr const char* kLegacyRowReason = "stored before per-kernel job ids (re-run once)";
+inline constexpr const char* kRekeyReason =
+    "measured by today's metrics code before the sparkle statistics had a version of their own (re-keyed)";
 Result<RunPlan> PlanRun(const std::vector<Job>& jobs, const RunOptions& options);
 
 // Renders every job of `batch` at the benchmark size, interleaved, after one

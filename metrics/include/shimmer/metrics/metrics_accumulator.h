@@ -28,8 +28,8 @@ struct AccumulatorSetup {
   int segment_length = 0;         // Welch segment, 2..frames
   bool reference_stderr = false;  // every reference frame comes with stderr.Y
   BootstrapSettings bootstrap;
-  // > 0: sparkle statistics with this luminance threshold (docs/metrics.md,
-  // "Sparkle statistics"); 0 leaves them out at no cost.
+  // > 0: sparkle statistics with this contrast to a pixel's neighbourhood
+  // (docs/metrics.md, "Sparkle statistics"); 0 leaves them out at no cost.
   double sparkle_threshold = 0;
 };
 

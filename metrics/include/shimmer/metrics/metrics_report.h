@@ -32,8 +32,9 @@ struct MetricsOptions {
   HighlightMaskOptions highlight;
   std::optional<FlickerSignal> signal;  // default: error with a reference, else test
   int segment_length = 0;               // 0: min(N, 64)
-  // > 0: sparkle statistics with this threshold on linear luminance (docs/metrics.md,
-  // "Sparkle statistics"); 0: none (and nothing of them in the report or its JSON).
+  // > 0: sparkle statistics with this contrast: a pixel above this many times
+  // its neighbourhood's mean luminance is a sparkle (docs/metrics.md, "Sparkle
+  // statistics"); 0: none (and nothing of them in the report or its JSON).
   double sparkle_threshold = 0;
 };
 

@@ -9,5 +9,8 @@
 namespace shimmer::metrics {
 
 std::string_view MetricsCodeVersion();
+// The sparkle statistics' own code (sparkle_statistics.h, .cpp): only rows
+// that compute them carry it.
+std::string_view SparkleCodeVersion();
 
 }  // namespace shimmer::metrics

@@ -1,9 +1,21 @@
 // Glint "sparkle statistics" (docs/metrics.md, "Sparkle statistics"): how
-// many pixels of the region are brighter than an absolute threshold in each
-// frame, how much that count varies over time, and how long a bright pixel
-// stays bright when followed along the motion vectors. Computed for the test
-// sequence and the reference alike, so that a glint model's 1-spp frames can
-// be compared with its supersampled reference (and a naive baseline).
+// many pixels of the region stand out of their neighbourhood by a contrast
+// in each frame, how much that count varies over time, and how long such a
+// pixel stays one when followed along the motion vectors. Computed for the
+// test sequence and the reference alike, so that a glint model's 1-spp
+// frames can be compared with its supersampled reference (and a naive
+// baseline).
+//
+// A sparkle is a pixel whose luminance is above `contrast` times the mean
+// luminance of its neighbourhood in the same frame (a Gaussian window of
+// kSparkleNeighbourhoodSigma pixels over the region's finite pixels, the
+// pixel itself left out), and that mean is held to at least
+// kSparkleFloorShare of the region's mean: the neighbourhood's mean is what
+// a glint-free surface (the smooth NDF D_g) would show there, so the count
+// measures the glitter's contrast, not the exposure or the shading level
+// (scaling a frame's luminance leaves it unchanged). The floor keeps a
+// speck on a black background from counting as a sparkle of infinite
+// contrast.
 #pragma once
 
 #include <cstdint>
@@ -29,8 +41,17 @@ struct SparkleStatistics {
   long long tracked = 0;          // sparkle pixel-frames whose track starts after frame 0 (age <= t)
 };
 
+// The neighbourhood's Gaussian sigma, in pixels: wide enough that the
+// window holds many glints (its effective area, 4 pi sigma^2, is about 110
+// pixels), narrow enough to follow a highlight's shading across a 96-pixel
+// frame.
+inline constexpr double kSparkleNeighbourhoodSigma = 3.0;
+// The floor of the neighbourhood's mean, as a share of the region's mean
+// luminance in that frame.
+inline constexpr double kSparkleFloorShare = 0.05;
+
 struct SparkleReport {
-  double threshold = 0;  // tau, on linear luminance
+  double threshold = 0;  // the contrast: a sparkle is above threshold x its neighbourhood's mean
   SparkleStatistics test;
   std::optional<SparkleStatistics> reference;  // with a reference
   // test / reference; empty without a reference or when either side is undefined or the denominator is 0.
@@ -39,13 +60,15 @@ struct SparkleReport {
 
 // Follows one sequence's sparkles frame by frame: a pixel's age (frames it
 // has been a sparkle, tracked through the motion vectors) in two int32
-// planes, the previous frame's and the current one's. Rows of one frame are
-// independent (each reads only the previous frame's ages), so AddRow may run
-// for different rows on different threads; BeginFrame and EndFrame may not.
+// planes, the previous frame's and the current one's. AddRow records a row
+// of the current frame and may run for different rows on different threads;
+// EndFrame, which needs the whole frame for the neighbourhoods, finds and
+// tracks the sparkles, and may not. The rows given to AddRow are read by
+// EndFrame: they must live until it returns.
 class SparkleTracker {
  public:
   SparkleTracker() = default;
-  SparkleTracker(int width, int height, double threshold);
+  SparkleTracker(int width, int height, double contrast);
 
   bool active() const { return width_ > 0; }
 
@@ -53,7 +76,8 @@ class SparkleTracker {
   // and the motion row (pixels towards the previous frame, (x, y) per pixel)
   // or null to track without warping (q = p).
   void AddRow(int y, const float* luminance, const uint8_t* region, const cv::Vec2f* motion);
-  // After every row of the frame: adds up its counts and makes it the previous frame.
+  // After every row of the frame: finds its sparkles, tracks them, adds up
+  // its counts and makes it the previous frame.
   void EndFrame();
 
   // The statistics over the frames so far (at least one).
@@ -63,8 +87,13 @@ class SparkleTracker {
   struct RowCounts {
     long long sparkles = 0, births = 0, tracked = 0;
   };
+  // Row y's sparkles and their ages (frame t's `current_`).
+  RowCounts TrackRow(int y, const uint8_t* sparkle, const cv::Vec2f* motion);
+
   int width_ = 0, height_ = 0;
-  double threshold_ = 0;
+  double contrast_ = 0;
+  cv::Mat luminance_, region_;                    // the current frame's rows (CV_32F, CV_8U)
+  std::vector<const cv::Vec2f*> motion_rows_;     // its motion rows, or nulls
   int frame_ = 0;  // t of the frame being added
   std::vector<int32_t> previous_, current_;
   std::vector<RowCounts> rows_;

@@ -256,6 +256,36 @@ TEST(RunCli, ShotsAreCheckedAndVariantsBenchmarkedOnce) {
   ASSERT_EQ(std::system(ws.Run("--db r.db --work r").c_str()), 0);
   const std::string retimed = ReadText(ws.dir / "log.txt").substr(before_old);
   EXPECT_NE(retimed.find("1 benchmark batches timed"), std::string::npos) << retimed;
+
+  // A cost left wider than the precision at the cap is timed again when the
+  // cap is raised: that variant alone, beside `none`; the others keep theirs.
+  auto timed = (*store)->Benchmarks();
+  ASSERT_TRUE(timed) << timed.error();
+  const auto tk19 = std::find_if(timed->begin(), timed->end(), [](const BenchmarkCost& c) { return c.variant == "tk19"; });
+  ASSERT_NE(tk19, timed->end());
+  {
+    auto writable = ResultStore::Open((ws.dir / "r.db").string());
+    ASSERT_TRUE(writable) << writable.error();
+    BenchmarkCost wide = *tk19;
+    wide.ratio_lo = wide.ratio_to_none * 0.5, wide.ratio_hi = wide.ratio_to_none * 2;
+    ASSERT_TRUE((*writable)->InsertBenchmarks({wide}));
+  }
+  std::string spec = ReadText(ws.dir / "tiny.json");
+  spec.replace(spec.find("\"max_repetitions\": 6"), 20, "\"max_repetitions\": 12");
+  std::ofstream(ws.dir / "tiny.json") << spec;
+  ASSERT_EQ(std::system(ws.Run("--db r.db --work r").c_str()), 0);
+  auto after = (*store)->Benchmarks();
+  ASSERT_TRUE(after) << after.error();
+  for (const BenchmarkCost& c : *after) {
+    const auto was = std::find_if(timed->begin(), timed->end(), [&](const BenchmarkCost& t) {
+      return t.variant == c.variant && t.params == c.params;
+    });
+    ASSERT_NE(was, timed->end()) << c.variant;
+    if (c.variant == "tk19" || c.variant == "none")
+      EXPECT_GT(c.repetitions, 6) << c.variant;
+    else
+      EXPECT_EQ(c.median_ms, was->median_ms) << c.variant;
+  }
 }
 
 // Seed 003's physics: on nm-plane under dolly (minified bumps, the footprint

@@ -402,7 +402,7 @@ TEST(Spec, ReferenceReplicatesConvergenceAndBenchmarkParse) {
   EXPECT_EQ(d->benchmark.width, 512);
   EXPECT_EQ(d->benchmark.repetitions, 5);
   EXPECT_DOUBLE_EQ(d->benchmark.precision, 0.03);
-  EXPECT_EQ(d->benchmark.max_repetitions, 100);
+  EXPECT_EQ(d->benchmark.max_repetitions, 300);
   auto off = ParseSpec(TrustSpec(",\n  \"benchmark\": false"), "v.json");
   ASSERT_TRUE(off) << off.error();
   EXPECT_FALSE(off->benchmark.enabled);

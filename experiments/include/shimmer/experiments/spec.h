@@ -48,7 +48,7 @@ struct BenchmarkOptions {
   int width = 512, height = 512;
   int repetitions = 5;        // a round: repetitions are added a round at a time
   double precision = 0.03;    // ... until every ratio's 95 % interval is within ±precision
-  int max_repetitions = 100;  // ... or this many were timed
+  int max_repetitions = 300;  // ... or this many were timed
 };
 
 struct MetricOptions {

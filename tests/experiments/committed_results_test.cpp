@@ -129,6 +129,24 @@ TEST(CommittedResults, EveryReportHasItsAnswerAsCsv) {
   for (const fs::path& dir : reports) EXPECT_TRUE(fs::exists(dir / "cells.csv")) << dir;
 }
 
+// Issue 37's cost aim: every timed ratio to `none` in every committed
+// report carries a 95 % interval within ±3 % of it (docs/method.md, Cost).
+TEST(CommittedResults, EveryTimedCostIsWithinThreePercent) {
+  for (const fs::path& dir : CommittedReports()) {
+    int timed = 0;
+    for (const Record& r : ReadCsv(dir / "report.csv")) {
+      if (r.at("variant") == "none" || r.at("bench_ratio_lo").empty()) continue;
+      const double ratio = std::stod(r.at("bench_ratio_to_none")), lo = std::stod(r.at("bench_ratio_lo")),
+                   hi = std::stod(r.at("bench_ratio_hi"));
+      EXPECT_TRUE(lo >= ratio * 0.97 && hi <= ratio * 1.03)
+          << dir.filename() << ": " << Shot(r) << " " << r.at("label") << " " << ratio << " [" << lo << ", " << hi
+          << "] after " << r.at("bench_repetitions") << " repetitions";
+      ++timed;
+    }
+    EXPECT_GT(timed, 0) << dir;
+  }
+}
+
 TEST(CommittedResults, EveryVerdictFollowsTheRuleFromTheRowsNumbers) {
   for (const fs::path& dir : CommittedReports()) {
     const std::vector<Record> rows = ReadCsv(dir / "report.csv");

@@ -259,22 +259,34 @@ TEST(RunCli, ShotsAreCheckedAndVariantsBenchmarkedOnce) {
 
   // A cost left wider than the precision at the cap is timed again when the
   // cap is raised: that variant alone, beside `none`; the others keep theirs.
-  auto timed = (*store)->Benchmarks();
+  // (Each read opens the store afresh: a read-only handle may keep pages of
+  // the file as it was when it read them.)
+  auto read = [&] {
+    auto fresh = ResultStore::Open((ws.dir / "r.db").string(), ResultStore::Mode::kReadOnly);
+    EXPECT_TRUE(fresh) << fresh.error();
+    return fresh ? (*fresh)->Benchmarks() : Result<std::vector<BenchmarkCost>>(fresh.failure());
+  };
+  auto timed = read();
   ASSERT_TRUE(timed) << timed.error();
   const auto tk19 = std::find_if(timed->begin(), timed->end(), [](const BenchmarkCost& c) { return c.variant == "tk19"; });
   ASSERT_NE(tk19, timed->end());
   {
+    // At 32 x 32 and 6 repetitions no interval is within ±3 %: every cost
+    // but tk19's is made precise here, and tk19's wide.
     auto writable = ResultStore::Open((ws.dir / "r.db").string());
     ASSERT_TRUE(writable) << writable.error();
-    BenchmarkCost wide = *tk19;
-    wide.ratio_lo = wide.ratio_to_none * 0.5, wide.ratio_hi = wide.ratio_to_none * 2;
-    ASSERT_TRUE((*writable)->InsertBenchmarks({wide}));
+    std::vector<BenchmarkCost> edited = *timed;
+    for (BenchmarkCost& c : edited) {
+      const double half = c.variant == "tk19" ? 0.5 : 0.0;
+      c.ratio_lo = c.ratio_to_none * (1 - half), c.ratio_hi = c.ratio_to_none * (1 + half);
+    }
+    ASSERT_TRUE((*writable)->InsertBenchmarks(edited));
   }
   std::string spec = ReadText(ws.dir / "tiny.json");
   spec.replace(spec.find("\"max_repetitions\": 6"), 20, "\"max_repetitions\": 12");
   std::ofstream(ws.dir / "tiny.json") << spec;
   ASSERT_EQ(std::system(ws.Run("--db r.db --work r").c_str()), 0);
-  auto after = (*store)->Benchmarks();
+  auto after = read();
   ASSERT_TRUE(after) << after.error();
   for (const BenchmarkCost& c : *after) {
     const auto was = std::find_if(timed->begin(), timed->end(), [&](const BenchmarkCost& t) {

@@ -339,12 +339,18 @@ json FingerprintJson(const render::RenderFingerprint& f) { return {{"kernel", f.
 // nlohmann objects are key-sorted: the dump is canonical.
 std::string Hash(const json& j) { return Fnv1a64Hex(j.dump()); }
 
+// A row's metrics version from the two code versions: the sparkle code's
+// only where the job computes sparkle statistics.
+std::string MetricsVersionFrom(const Job& job, std::string_view core, std::string_view sparkles) {
+  std::string version(core);
+  if (job.metrics.sparkle_threshold > 0) version += "+sparkles:" + std::string(sparkles);
+  return version;
+}
+
 }  // namespace
 
 std::string MetricsVersionOf(const Job& job) {
-  std::string version(metrics::MetricsCodeVersion());
-  if (job.metrics.sparkle_threshold > 0) version += "+sparkles:" + std::string(metrics::SparkleCodeVersion());
-  return version;
+  return MetricsVersionFrom(job, metrics::MetricsCodeVersion(), metrics::SparkleCodeVersion());
 }
 
 // The metrics code of commit 3e90d26, the last before the split: all of it
@@ -353,14 +359,14 @@ const MetricsVersionSplit kMetricsVersionSplit = {"f7c6fc8c154db46e", "e9101a0d4
 
 bool MeasuredByTodaysMetrics(std::string_view stored, const Job& job, std::string_view core_now,
                              std::string_view sparkles_now, const MetricsVersionSplit& split) {
+  if (stored == MetricsVersionFrom(job, core_now, sparkles_now)) return true;
   const bool sparkles = job.metrics.sparkle_threshold > 0;
-  std::string today(core_now);
-  if (sparkles) today += "+sparkles:" + std::string(sparkles_now);
-  if (stored == today) return true;
   return stored == split.before && core_now == split.core && (!sparkles || sparkles_now == split.sparkles);
 }
 
-bool Rekeyable(const Job& job, const JobSources& stored, const JobSources& now) {
+bool Rekeyable(const Job& job, const json& stored_sources, const JobSources& now) {
+  if (stored_sources.is_null()) return false;  // from before per-kernel ids: run once more
+  const JobSources stored = JobSources::FromJson(stored_sources);
   return WhyRerun(job, stored, now) == std::vector<std::string>{"metrics version changed"} &&
          MeasuredByTodaysMetrics(stored.metrics, job, metrics::MetricsCodeVersion(), metrics::SparkleCodeVersion());
 }

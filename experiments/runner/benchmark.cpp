@@ -23,7 +23,6 @@
 #include <set>
 
 #include "runner_parts.h"
-#include "shimmer/experiments/minimize.h"
 #include "shimmer/experiments/runner.h"
 
 namespace shimmer::experiments {
@@ -163,7 +162,6 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
     for (int r = 0; r < round && reps < bench.max_repetitions; ++r, ++reps) {
       // Frames spread over the path by the golden ratio, the same for every variant.
       const int frame = static_cast<int>(std::fmod(reps * 0.6180339887, 1.0) * frames) % std::max(frames, 1);
-      double none_ms = 0;
       std::vector<double> now(count, 0.0);
       for (std::size_t i = 0; i < count; ++i) {
         const std::size_t k = reps % 2 ? count - 1 - i : i;
@@ -171,10 +169,9 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
         auto f = renderers[k]->RenderFrame(frame);
         if (!f) return Prefixed("benchmark of " + batch.jobs[k].variant, f.failure());
         now[k] = f->gpu_ms;
-        if (k == 0) none_ms = f->gpu_ms;
       }
       for (std::size_t k = 0; k < count; ++k)
-        if (timing[k]) ms[k].push_back(now[k]), paired[k].push_back(none_ms);
+        if (timing[k]) ms[k].push_back(now[k]), paired[k].push_back(now[0]);
     }
     for (std::size_t k = 1; k < count; ++k)
       if (timing[k] && PairedRatio(ms[k], paired[k]).Within(bench.precision)) timing[k] = false;

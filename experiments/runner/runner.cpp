@@ -396,7 +396,7 @@ Result<RunPlan> PlanRun(const std::vector<Job>& all_jobs, const RunOptions& opti
       // before a legacy one (it says more), then the fewest reasons.
       std::pair<bool, std::size_t> closest{true, std::numeric_limits<std::size_t>::max()};
       const bool rekey = std::any_of(it->second.begin(), it->second.end(), [&](const JobResult* stored) {
-        return !stored->sources.is_null() && Rekeyable(job, JobSources::FromJson(stored->sources), *now);
+        return Rekeyable(job, stored->sources, *now);
       });
       if (rekey) {
         planned.why = {kRekeyReason};
@@ -476,7 +476,7 @@ Result<bool> RekeyRow(ResultStore& store, const Job& job, const std::string& id,
   const auto now = SourcesOf(job);
   if (!now) return now.failure();
   for (const JobResult& row : it->second) {
-    if (row.sources.is_null() || !Rekeyable(job, JobSources::FromJson(row.sources), *now)) continue;
+    if (!Rekeyable(job, row.sources, *now)) continue;
     JobResult copy = row;
     copy.id = id;
     copy.sources = now->ToJson();

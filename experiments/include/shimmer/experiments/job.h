@@ -126,10 +126,11 @@ struct MetricsVersionSplit {
 extern const MetricsVersionSplit kMetricsVersionSplit;
 bool MeasuredByTodaysMetrics(std::string_view stored, const Job& job, std::string_view core_now,
                              std::string_view sparkles_now, const MetricsVersionSplit& split = kMetricsVersionSplit);
-// A stored row of `job` that today's code would give the same numbers under
+// A stored row of `job` (its JobSources::ToJson, null for a row from before
+// per-kernel ids) that today's code would give the same numbers under
 // another id: its sources differ from `now` in the metrics version only,
 // and MeasuredByTodaysMetrics holds.
-bool Rekeyable(const Job& job, const JobSources& stored, const JobSources& now);
+bool Rekeyable(const Job& job, const nlohmann::json& stored_sources, const JobSources& now);
 
 // The sources of `job` as this shimmer would run it, kept per process. An
 // external sequence has none (its frames' content hashes are in the job).

@@ -63,8 +63,8 @@ struct SparkleReport {
 // planes, the previous frame's and the current one's. AddRow records a row
 // of the current frame and may run for different rows on different threads;
 // EndFrame, which needs the whole frame for the neighbourhoods, finds and
-// tracks the sparkles, and may not. The rows given to AddRow are read by
-// EndFrame: they must live until it returns.
+// tracks the sparkles, and may not. AddRow copies the luminance and region
+// rows but keeps the motion row's pointer: it must live until EndFrame returns.
 class SparkleTracker {
  public:
   SparkleTracker() = default;

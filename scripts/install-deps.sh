@@ -13,7 +13,7 @@ packages=(
   libtinygltf-dev libtinyobjloader-dev
   libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
   gnuplot-nox chromium
-  slurm-wlm munge sqlite3
+  slurm-wlm munge sqlite3 python3
 )
 
 missing=()

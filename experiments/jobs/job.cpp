@@ -119,6 +119,8 @@ Job SpecJob(const Spec& spec, const std::string& scene, const std::string& mater
   job.reference = spec.reference;
   if (auto it = spec.reference_spp_by_material.find(material); it != spec.reference_spp_by_material.end())
     job.reference.spp = it->second;
+  if (auto it = spec.reference_spp_by_scene.find(scene); it != spec.reference_spp_by_scene.end())
+    job.reference.spp = it->second;
   job.metrics = spec.metrics;
   if (auto it = spec.user_variants.find(variant); it != spec.user_variants.end()) {
     job.variant_file = it->second->file;
@@ -233,6 +235,8 @@ SceneTraits TraitsOfScene(const scene::Scene& scene) {
   traits.sg_light = scene.light.type == shading::LightType::kSg;
   traits.sg_sharpness = traits.sg_light ? scene.light.radius : 0.0;
   traits.normal_maps = (scene::SceneFeatures(scene) & shading::kSceneNormalMaps) != 0;
+  traits.meshes = (scene::SceneFeatures(scene) & shading::kSceneMeshes) != 0;
+  traits.geometry_class = scene.geometry_class;
   return traits;
 }
 
@@ -242,8 +246,12 @@ json JobSources::ToJson() const {
             {"reference_kernel", reference.kernel},
             {"reference_inputs", reference.inputs},
             {"metrics", metrics}};
-  if (scene.known)
+  if (scene.known) {
     j["scene"] = {{"sg_light", scene.sg_light}, {"normal_maps", scene.normal_maps}, {"sg_sharpness", scene.sg_sharpness}};
+    // Written only where set, so that the traits of analytic scenes read as before.
+    if (scene.meshes) j["scene"]["meshes"] = true;
+    if (!scene.geometry_class.empty()) j["scene"]["geometry_class"] = scene.geometry_class;
+  }
   return j;
 }
 
@@ -258,6 +266,8 @@ JobSources JobSources::FromJson(const json& j) {
     s.scene.sg_light = it->value("sg_light", false);
     s.scene.normal_maps = it->value("normal_maps", false);
     s.scene.sg_sharpness = it->value("sg_sharpness", 0.0);
+    s.scene.meshes = it->value("meshes", false);
+    s.scene.geometry_class = it->value("geometry_class", std::string());
   }
   return s;
 }

@@ -194,7 +194,7 @@ ExternalSequence ParseSequence(const json& e, int index, const Spec& spec, const
 void ParseReference(const json& j, Spec& s) {
   const json& r = j["reference"];
   if (!r.is_object()) throw SpecError{"reference", "must be {\"spp\": N} or {\"tolerance\": T}"};
-  RejectUnknownKeys(r, {"spp", "spp_by_material", "tolerance", "replicates", "converge"}, "reference");
+  RejectUnknownKeys(r, {"spp", "spp_by_material", "spp_by_scene", "tolerance", "replicates", "converge"}, "reference");
   if (r.contains("spp")) s.reference.spp = PositiveInt(r["spp"], "spp", render::kMaxReferenceSpp);
   if (r.contains("spp_by_material")) {
     const json& m = r["spp_by_material"];
@@ -206,6 +206,18 @@ void ParseReference(const json& j, Spec& s) {
         throw SpecError{"spp_by_material", material + ": not one of the spec's materials" +
                                                std::string(s.groups.empty() ? "" : " (nor of its groups)")};
       s.reference_spp_by_material[material] = PositiveInt(spp, "spp_by_material", render::kMaxReferenceSpp);
+    }
+  }
+  if (r.contains("spp_by_scene")) {
+    const json& m = r["spp_by_scene"];
+    if (!m.is_object()) throw SpecError{"spp_by_scene", "must be {\"SCENE\": N, ...}"};
+    std::set<std::string> scenes;
+    for (const ShotGroup& group : AllGroups(s)) scenes.insert(group.scenes.begin(), group.scenes.end());
+    for (const auto& [scene, spp] : m.items()) {
+      if (!scenes.count(scene))
+        throw SpecError{"spp_by_scene", scene + ": not one of the spec's scenes" +
+                                            std::string(s.groups.empty() ? "" : " (nor of its groups)")};
+      s.reference_spp_by_scene[scene] = PositiveInt(spp, "spp_by_scene", render::kMaxReferenceSpp);
     }
   }
   if (r.contains("tolerance")) {

@@ -228,12 +228,25 @@ std::string DecisionRuleText() {
 
 std::string CellRowOf(const Group& group) {
   if (group.material.rfind("glints", 0) == 0) return "glints";
+  if (!group.rows.empty())
+    if (SceneTraits traits = TraitsOf(*group.rows.front()); !traits.geometry_class.empty())
+      return traits.geometry_class;
   if (SgLitScene(group)) return "SG-lit";
   if (NormalMappedScene(group)) return "normal-mapped";
+  if (!group.rows.empty() && TraitsOf(*group.rows.front()).meshes) return "mesh";
   return GeometryClass(group.scene);
 }
 
-const std::vector<std::string>& CellRows() { return kRows; }
+std::vector<std::string> CellRowsInOrder(const std::set<std::string>& rows) {
+  std::vector<std::string> out;
+  for (const std::string& row : kRows) {
+    if (row == "other")
+      for (const std::string& declared : rows)
+        if (std::find(kRows.begin(), kRows.end(), declared) == kRows.end()) out.push_back(declared);
+    if (rows.count(row)) out.push_back(row);
+  }
+  return out;
+}
 const std::vector<std::string>& RoughnessBands() { return kBands; }
 
 bool CellCandidate::Eligible(int cell_tables) const {
@@ -298,13 +311,16 @@ std::vector<CellAnswer> AnswerCells(const std::vector<const Group*>& groups) {
   auto index = [](const std::vector<std::string>& order, const std::string& name) {
     return int(std::find(order.begin(), order.end(), name) - order.begin());
   };
+  std::set<std::string> present;
+  for (const Group* g : groups) present.insert(CellRowOf(*g));
+  const std::vector<std::string> rows = CellRowsInOrder(present);
   for (const Group* g : groups)
-    cells[{index(kRows, CellRowOf(*g)), index(kBands, RoughnessClass(g->alpha))}].push_back(g);
+    cells[{index(rows, CellRowOf(*g)), index(kBands, RoughnessClass(g->alpha))}].push_back(g);
 
   std::vector<CellAnswer> out;
   for (const auto& [key, members] : cells) {
     CellAnswer cell;
-    cell.row = kRows[key.first], cell.band = kBands[key.second];
+    cell.row = rows[key.first], cell.band = kBands[key.second];
     cell.tables = int(members.size());
     std::set<std::string> shots;
     for (const Group* g : members) shots.insert(g->Shot());

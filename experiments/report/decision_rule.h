@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -143,9 +144,12 @@ Verdict SeparatePaired(const PairedComparison& a_minus_b);
 std::string DecisionRuleText();
 
 // The rows of the answer grid: geometry classes, then normal-mapped, SG-lit
-// and glint materials as their own rows.
+// and glint materials as their own rows. A scene file's geometry_class is
+// a row of its own (docs/scenes.md), placed before "other".
 std::string CellRowOf(const Group& group);
-const std::vector<std::string>& CellRows();
+// `rows` (CellRowOf's values) in the grid's order: the built-in classes in
+// theirs, each scene-declared one before "other", alphabetically.
+std::vector<std::string> CellRowsInOrder(const std::set<std::string>& rows);
 const std::vector<std::string>& RoughnessBands();
 
 // One variant in one cell.

@@ -70,7 +70,9 @@ void AnswerSection(Document& doc, const std::vector<CellAnswer>& cells, const st
   std::vector<std::string> header = {"geometry or material"};
   header.insert(header.end(), bands.begin(), bands.end());
   std::vector<std::vector<std::string>> rows;
-  for (const std::string& row : CellRows()) {
+  std::set<std::string> present;
+  for (const CellAnswer& c : cells) present.insert(c.row);
+  for (const std::string& row : CellRowsInOrder(present)) {
     std::vector<std::string> line = {row};
     bool any = false;
     for (const std::string& band : bands) {
@@ -132,8 +134,9 @@ void ClassLeaderboards(Document& doc, const std::vector<const Group*>& groups) {
       "are to `none` of the same table, medians over the tables with their interquartile range; \"better\" "
       "counts the tables where the decision rule says so.");
   std::map<std::string, std::vector<const Group*>> by_row;
-  for (const Group* g : groups) by_row[CellRowOf(*g)].push_back(g);
-  for (const std::string& row : CellRows()) {
+  std::set<std::string> present;
+  for (const Group* g : groups) by_row[CellRowOf(*g)].push_back(g), present.insert(CellRowOf(*g));
+  for (const std::string& row : CellRowsInOrder(present)) {
     auto it = by_row.find(row);
     if (it == by_row.end()) continue;
     const int tables = int(it->second.size());

@@ -62,6 +62,13 @@ struct Interval {
 };
 Interval Ci95(const JobResult& row, const char* key);
 
+// Tokuyoshi and Kaplanyan 2019's Fig. 1 ordering in one table, from the 95 %
+// intervals of the forms' relmse: the K16 non-axis-aligned form
+// (`k16_non_axis`) wholly above every other form's, and the TK19
+// non-axis-aligned one (`tk19_non_axis`) wholly above none (lowest, or tied
+// with the lowest). False when any interval is unknown.
+bool Fig1OrderingHolds(const std::vector<Interval>& relmse, std::size_t k16_non_axis, std::size_t tk19_non_axis);
+
 // Lower is better; decision_rule.h's Separate decides which.
 enum class Verdict { kBetter, kWorse, kIndistinguishable, kUnknown };
 

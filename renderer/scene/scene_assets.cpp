@@ -8,6 +8,8 @@
 #include <map>
 #include <mutex>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "shimmer/core/content_hash.h"
 #include "shimmer/renderer/mesh_loading.h"
 #include "shimmer/renderer/scene.h"
@@ -104,6 +106,45 @@ Result<std::shared_ptr<const PlacedMesh>> PlaceAsset(const std::filesystem::path
   return cache.placed.emplace(key, std::move(placed)).first->second;
 }
 
+Result<shading::MaterialDesc> MaterialOfMesh(const MeshMaterial& m) {
+  using R = Result<shading::MaterialDesc>;
+  double roughness = m.roughness;
+  if (const MeshTexture& t = m.metallic_roughness_texture; t.present()) {
+    cv::Mat image = t.encoded ? cv::imdecode(*t.encoded, cv::IMREAD_UNCHANGED) : cv::imread(t.file.string(), cv::IMREAD_UNCHANGED);
+    const std::string name = t.encoded ? "the embedded image " + std::to_string(t.image) : t.file.string();
+    if (image.empty()) return R::Failure(name + ": the roughness texture cannot be read (PNG or JPEG expected)");
+    const double full = image.depth() == CV_16U ? 65535.0 : image.depth() == CV_8U ? 255.0 : 0.0;
+    if (full == 0) return R::Failure(name + ": the roughness texture is not 8 or 16 bits per channel");
+    // OpenCV orders colour channels B, G, R(, A): glTF's G is channel 1; a grey image has one.
+    const cv::Scalar mean = cv::mean(image);
+    roughness *= (image.channels() >= 3 ? mean[1] : mean[0]) / full;
+  }
+  shading::MaterialDesc d;
+  d.ndf = shading::Ndf::kGgx;
+  const double alpha = std::clamp(roughness * roughness, 1e-4, 1.0);
+  d.alpha = {alpha, alpha};
+  const glm::dvec3 base(m.base_color);
+  d.f0 = glm::mix(glm::dvec3(0.04), base, m.metallic);
+  d.albedo = base * (1 - m.metallic);
+  return d;
+}
+
+Result<std::shared_ptr<const NormalMap>> NormalMapOfMesh(const MeshMaterial& m, NormalMapSource* source) {
+  using R = Result<std::shared_ptr<const NormalMap>>;
+  const MeshTexture& t = m.normal_texture;
+  if (!t.present()) return std::shared_ptr<const NormalMap>();
+  if (t.encoded)
+    return R::Failure("the normal texture is embedded (image " + std::to_string(t.image) +
+                      "); give the asset entry a 'normal_map' with the image as a file");
+  NormalMapSource s;
+  s.file = t.file.string();
+  s.strength = std::clamp(m.normal_scale, 0.0, 10.0);
+  auto map = LoadNormalMap(s);
+  if (!map) return map.failure();
+  *source = s;
+  return *map;
+}
+
 CameraRig FramingRig(glm::dvec3 centre, double radius, double fov_y_deg) {
   constexpr double kPi = 3.14159265358979323846;
   CameraRig rig;
@@ -130,7 +171,18 @@ Result<Scene> AssetScene(const std::filesystem::path& file) {
   if (!placed) return placed.failure();
   Scene s;
   s.name = file.filename().string();
-  s.primitives.push_back(MeshPrimitive(*placed));
+  Primitive mesh = MeshPrimitive(*placed);
+  auto material = MaterialOfMesh((*placed)->mesh.material);
+  if (!material) return material.failure();
+  s.material = *material;
+  // An embedded normal texture is left out here (render --asset frames the
+  // asset as it is); a scene file can give it as a file.
+  auto map = NormalMapOfMesh((*placed)->mesh.material, &mesh.normal_map_source);
+  if (map)
+    mesh.normal_map = *map;
+  else if (!(*placed)->mesh.material.normal_texture.encoded)
+    return map.failure();
+  s.primitives.push_back(mesh);
   s.light.type = shading::LightType::kDirectional;
   s.light.vec = glm::normalize(glm::dvec3(0.4, 0.8, 0.45));
   const glm::dvec3 centre = ((*placed)->lo + (*placed)->hi) * 0.5;

@@ -241,6 +241,18 @@ Status ReadAssets(const nlohmann::json& j, const std::string& source, Scene& s) 
     Primitive p = MeshPrimitive(*placed);
     ReadNormalMap(r, aj, source, pointer, &p);
     if (!r.ok()) return Status::Failure(r.error());
+    if (!aj.contains("normal_map")) {
+      auto own = NormalMapOfMesh(p.mesh->mesh.material, &p.normal_map_source);
+      if (!own) return Status::Failure(source + ": " + pointer + "/file: " + own.error());
+      p.normal_map = *own;
+    }
+    // Neither the scene nor an entry before gives the material: the first
+    // asset's own.
+    if (material.empty() && material_at.empty() && index == 1) {
+      auto own = MaterialOfMesh(p.mesh->mesh.material);
+      if (!own) return Status::Failure(source + ": " + pointer + "/file: " + own.error());
+      s.material = *own;
+    }
     if (!material.empty()) {
       auto m = ParseMaterial(material, s.material);
       if (!m) return Status::Failure(source + ": " + pointer + "/material: " + m.error());
@@ -264,7 +276,11 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
   Scene s;
   s.name = source;
   FieldReader top(j, source, "");
-  top.Keys({"name", "primitives", "assets", "light", "material", "camera"}).String("name", &s.name);
+  top.Keys({"name", "geometry_class", "primitives", "assets", "light", "material", "camera"})
+      .String("name", &s.name)
+      .String("geometry_class", &s.geometry_class);
+  if (top.ok() && j.contains("geometry_class") && s.geometry_class.empty())
+    return R::Failure(source + ": /geometry_class: must be a non-empty string");
   if (top.ok() && !j.contains("assets")) top.Require("primitives");
   if (!top.ok()) return R::Failure(top.error());
   const nlohmann::json no_primitives = nlohmann::json::array();

@@ -195,6 +195,49 @@ TEST(ReportOverview, SgLitShotsAreTheirOwnClass) {
   EXPECT_EQ(cells[1].pick->label, "tk21");
 }
 
+// A scene file's geometry_class (stored with its rows' traits) is a row of
+// the answer of its own, placed before "other"; a mesh scene without one is
+// "mesh".
+TEST(ReportOverview, DeclaredGeometryClassesAreRowsOfTheirOwn) {
+  std::vector<JobResult> rows;
+  for (const char* camera : {"orbit", "dolly"}) {
+    auto add = [&](const char* scene, const char* v, double err, nlohmann::json traits) {
+      rows.push_back(Row(scene, "ggx:0.05", v, err, 0.0, 0.05));
+      rows.back().job.camera = camera;
+      if (!traits.is_null()) rows.back().sources = {{"scene", traits}};
+    };
+    const nlohmann::json lowpoly = {{"sg_light", false}, {"normal_maps", false}, {"sg_sharpness", 0},
+                                    {"meshes", true}, {"geometry_class", "low-poly mesh"}};
+    const nlohmann::json mesh = {{"sg_light", false}, {"normal_maps", false}, {"sg_sharpness", 0}, {"meshes", true}};
+    add("sphere", "none", 1.0, nullptr);
+    add("sphere", "tk19", 0.5, nullptr);
+    add("torus.json", "none", 1.0, lowpoly);
+    add("torus.json", "tk19", 0.4, lowpoly);
+    add("asset.json", "none", 1.0, mesh);
+    add("asset.json", "tk19", 0.4, mesh);
+    add("my.json", "none", 1.0, nullptr);
+    add("my.json", "tk19", 0.4, nullptr);
+  }
+  const std::vector<Group> groups = GroupRows(rows);
+  const auto cells = AnswerCells(Pointers(groups));
+  std::vector<std::string> order;
+  for (const CellAnswer& c : cells) order.push_back(c.row);
+  EXPECT_EQ(order, (std::vector<std::string>{"small curved", "low-poly mesh", "mesh", "other"}));
+  EXPECT_EQ(CellRowsInOrder({"glints", "zz", "other", "aa", "thin"}),
+            (std::vector<std::string>{"thin", "aa", "zz", "other", "glints"}));
+}
+
+// The paper's ordering: the first form wholly above all others, the last
+// wholly above none.
+TEST(ReportBeyond, Fig1OrderingNeedsSeparateIntervals) {
+  const Interval k16{10, 20}, mid{1, 2}, tk19{0.5, 1.5}, low{0.1, 0.4};
+  EXPECT_TRUE(Fig1OrderingHolds({k16, mid, tk19}, 0, 2));
+  EXPECT_FALSE(Fig1OrderingHolds({k16, mid, low, tk19}, 0, 3));  // tk19 wholly above `low`
+  EXPECT_FALSE(Fig1OrderingHolds({Interval{1.9, 20}, mid, tk19}, 0, 2));  // k16 overlaps `mid`
+  EXPECT_TRUE(Fig1OrderingHolds({k16, mid, Interval{0.2, 1.5}}, 0, 2));
+  EXPECT_FALSE(Fig1OrderingHolds({k16, Interval{}, tk19}, 0, 2));        // unknown: not judged to hold
+}
+
 // Normal-mapped shots run the normal-map filters: their own class, and a
 // section with each filter's stored bytes per texel beside its error.
 TEST(ReportOverview, NormalMappedShotsAreTheirOwnClassWithTheirMemory) {

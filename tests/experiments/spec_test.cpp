@@ -455,6 +455,29 @@ TEST(Spec, ReferenceSppByMaterialGivesSharpMaterialsTheirOwnSampleCount) {
   }
 }
 
+// spp_by_scene gives a scene its own samples, before spp_by_material.
+TEST(Spec, ReferenceSppBySceneComesBeforeTheMaterials) {
+  const std::string spec = R"({"name": "v", "scenes": ["sphere", "wires"], "materials": ["ggx:0.01", "ggx:0.2"],
+  "cameras": ["orbit"], "variants": ["none"],
+  "reference": {"spp": 6, "spp_by_material": {"ggx:0.01": 12}, "spp_by_scene": {"wires": 3}}})";
+  auto r = ParseSpec(spec, "m.json");
+  ASSERT_TRUE(r) << r.error();
+  const std::vector<Job> jobs = ExpandJobs(*r);
+  ASSERT_EQ(jobs.size(), 4u);
+  for (const Job& j : jobs)
+    EXPECT_EQ(j.reference.spp, j.scene == "wires" ? 3 : (j.material == "ggx:0.01" ? 12 : 6)) << j.scene << " " << j.material;
+
+  for (const auto& [tail, expected] : std::vector<std::pair<std::string, std::string>>{
+           {R"(, "reference": {"spp_by_scene": {"wirez": 4}})", "wirez: not one of the spec's scenes"},
+           {R"(, "reference": {"spp_by_scene": {"sphere": 0}})", "spp_by_scene: must be an integer"},
+           {R"(, "reference": {"spp_by_scene": [4]})", "spp_by_scene: must be {"},
+       }) {
+    auto bad = ParseSpec(TrustSpec(tail), "bad.json");
+    ASSERT_FALSE(bad) << tail;
+    EXPECT_NE(bad.error().find(expected), std::string::npos) << bad.error();
+  }
+}
+
 TEST(Spec, SignedRankCriticalRanksMatchTheWilcoxonTable) {
   // Two-sided 5 % critical values of the signed-rank statistic (Wilcoxon's
   // table: T <= 0, 2, 8, 52 rejects at n = 6, 7, 10, 20), plus one.

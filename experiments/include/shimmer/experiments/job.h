@@ -94,6 +94,8 @@ struct SceneTraits {
   bool known = false;  // false in rows stored before traits were kept
   bool sg_light = false, normal_maps = false;
   double sg_sharpness = 0;  // the SG light's sharpness, with sg_light
+  bool meshes = false;      // triangle meshes among its primitives
+  std::string geometry_class;  // the scene file's geometry_class, if it names one
 };
 
 // The traits of a loaded scene.

@@ -166,6 +166,9 @@ struct Spec {
   // reference.spp_by_material: N per material where the default N is not
   // enough (sharp highlights need more samples per axis than rough ones).
   std::map<std::string, int> reference_spp_by_material;
+  // reference.spp_by_scene: N per scene, before spp_by_material (a mesh
+  // scene's samples cost several times an analytic one's: docs/scenes.md).
+  std::map<std::string, int> reference_spp_by_scene;
   MetricOptions metrics;
   BenchmarkOptions benchmark;
   std::vector<FitConfig> fits;  // the `fit` section: one object or a list

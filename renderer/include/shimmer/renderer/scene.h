@@ -75,6 +75,9 @@ struct CameraRig {
 
 struct Scene {
   std::string name;
+  // The row of the report's answer its shots belong to ("low-poly mesh"),
+  // where the scene file names one; empty: the report classes it itself.
+  std::string geometry_class;
   std::vector<Primitive> primitives;
   shading::LightDesc light;
   shading::MaterialDesc material;  // the default; --material overrides it
@@ -96,6 +99,18 @@ inline constexpr double kMaxSgSharpness = 1e6;
 Result<Scene> AssetScene(const std::filesystem::path& file);
 // The scene primitive of a placed mesh: its bounds as a and b.
 Primitive MeshPrimitive(std::shared_ptr<const PlacedMesh> mesh);
+// An asset's own material as the scene's (used where neither the scene nor
+// the asset entry gives one): glTF's metallic-roughness model (glTF 2.0 spec,
+// Appendix B) as GGX with alpha = roughness^2, f0 = mix(0.04, base colour,
+// metallic) and diffuse albedo = base colour * (1 - metallic). A roughness
+// texture (glTF: G; MTL map_Pr: its one channel) multiplies the factor by
+// its mean over the image, since a scene shades with one alpha.
+Result<shading::MaterialDesc> MaterialOfMesh(const MeshMaterial& m);
+// The asset's normal texture as a normal map (its glTF `scale` as the
+// strength), where the asset entry names none: null when the mesh has no
+// normal texture. An embedded image (data URI, GLB) is refused with a
+// message that says to give `normal_map` a file.
+Result<std::shared_ptr<const NormalMap>> NormalMapOfMesh(const MeshMaterial& m, NormalMapSource* source);
 // Looking at `centre` from 20 degrees above and 30 around, far enough that
 // the sphere of `radius` about it fills 90 % of the vertical field of view.
 CameraRig FramingRig(glm::dvec3 centre, double radius, double fov_y_deg);

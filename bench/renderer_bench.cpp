@@ -24,6 +24,8 @@ constexpr int kSize = 512;
 // SHIMMER_BENCH_SCENE and SHIMMER_BENCH_MATERIAL (as a spec names them, e.g.
 // "bumpy-plane" and "ggx:0.01") time the frame on another shot: a filter's
 // cost depends on how wide its footprints are against the lobe.
+// SHIMMER_BENCH_REFERENCE_SPP (16) sets the reference's N: a mesh scene's
+// sample costs several times an analytic one's.
 std::string FromEnvironment(const char* name, const char* fallback) {
   const char* v = std::getenv(name);
   return v && *v ? v : fallback;
@@ -138,8 +140,9 @@ int main(int argc, char** argv) {
       ->UseManualTime()
       ->Unit(benchmark::kMillisecond)
       ->Iterations(4);
+  const int reference_spp = std::atoi(FromEnvironment("SHIMMER_BENCH_REFERENCE_SPP", "16").c_str());
   benchmark::RegisterBenchmark("reference", BM_Reference)
-      ->Arg(16)
+      ->Arg(reference_spp > 0 ? reference_spp : 16)
       ->UseManualTime()
       ->Unit(benchmark::kMillisecond)
       ->Iterations(3);

@@ -4,6 +4,8 @@ shots (docs/scenes.md, "Mesh shots"), from nothing but this script, so the
 project carries no third-party file.
 
     python3 scripts/generate-assets.py [OUT_DIR]     (default: experiments/scenes)
+    python3 scripts/generate-assets.py --bench DIR   the speed report's 100k-triangle torus
+                                                     (torus-100k.glb and its scene torus-100k.json)
 
 Every byte is a function of this script: the same run writes the same files,
 and a test (tests/renderer/generated_assets_test) regenerates them and
@@ -392,7 +394,20 @@ def write_tk19_fig1(out):
         "camera": {"target": [0, 0.4, -0.5], "distance": 8, "elevation_deg": 6, "azimuth_deg": -10, "fov_y_deg": 30}})
 
 
+def write_bench_torus(out):
+    """320 x 160 quads: 102,400 triangles, for the renderer's mesh aims."""
+    g = Gltf()
+    g.node("torus", g.mesh("torus 320x160", *torus(1.0, 0.4, 320, 160)))
+    g.write_glb(os.path.join(out, "torus-100k.glb"))
+    write_scene(out, "torus-100k", "fine mesh", {"assets": [{"file": "torus-100k.glb"}], "light": TORUS_LIGHT,
+                                                 "material": "ggx:0.05", "camera": TORUS_CAMERA})
+
+
 def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "--bench":
+        os.makedirs(sys.argv[2], exist_ok=True)
+        write_bench_torus(sys.argv[2])
+        return
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "experiments", "scenes")
     os.makedirs(out, exist_ok=True)
     write_torus_lowpoly(out)

@@ -46,6 +46,16 @@ step ndf-centre-jacobian.txt shimmer ndf --variant k16-ggx-rect-stable --alpha 0
   --precision float
 step ndf-inner-jacobian.txt shimmer ndf --variant k16-ggx-rect-jacobian --alpha 0.2 --slope 2 0 --footprint 1 1 \
   --precision float
+# A mesh asset (the low-poly torus of experiments/scenes): its first frame and
+# the map of its error's flicker go to docs/images for the README.
+cp "$root/experiments/scenes/torus-lowpoly.gltf" "$root/experiments/scenes/torus-lowpoly.bin" .
+step render-asset.txt shimmer render --asset torus-lowpoly.gltf --material ggx:0.05 --camera orbit --frames 16 \
+  --size 128 128 --out torus --preview torus.png
+step render-asset-reference.txt shimmer render --asset torus-lowpoly.gltf --material ggx:0.05 --camera orbit \
+  --frames 16 --size 128 128 --reference-spp 4 --out torus-ref
+step metrics-asset.txt shimmer metrics torus torus-ref --highlight-mask --highlight-threshold 0.1 --out torus-maps
+cp torus.png "$root/docs/images/asset-torus-lowpoly-none.png"
+cp torus-maps/tv_err.png "$root/docs/images/asset-torus-lowpoly-tv_err.png"
 fi
 cd "$root"
 # The generated blocks of the README and of docs/*.md: a console transcript

@@ -111,6 +111,25 @@ def main(json_dir, out_path):
     aims.append(("every filter ≤ 1.3× `none` (quad derivatives, 512² `sphere-field`)",
                  f"{len(within)} of {len(known)} within; the dearest `{worst[0]}` {times(worst[1])}",
                  None if not known else len(within) == len(known)))
+
+    # Meshes (issue 38): the BVH build on one core, and `none` against the
+    # reference per sample on a 102,400-triangle torus, each from its own run.
+    _, bvh = rows(d / "bvh.json") if (d / "bvh.json").exists() else ({}, {})
+    _, mesh = rows(d / "mesh.json") if (d / "mesh.json").exists() else ({}, {})
+    builds = {n.split("/")[1]: r for n, r in bvh.items() if n.startswith("BM_Build/") and "error" not in r}
+    rays = {n.split("/")[1]: r for n, r in bvh.items() if n.startswith("BM_Ray/") and "error" not in r}
+    slowest_build = min((r["triangles/s"] for r in builds.values()), default=None)
+    aims.append(("BVH build ≥ 1 M triangles/s on one core (1 M-triangle soup, 100 k-triangle sphere)",
+                 "n/a (no bvh run)" if slowest_build is None else
+                 ", ".join(f"{k}: {fmt(r['triangles/s'] * 1e-6)} M/s" for k, r in sorted(builds.items())),
+                 None if slowest_build is None else slowest_build >= 1e6))
+    mesh_none = time_of(mesh.get("frame/none/quad/iterations:8/manual_time"))
+    mesh_reference = next((r for n, r in mesh.items() if n.startswith("reference") and "error" not in r), None)
+    mesh_msamples = mesh_reference.get("Msamples_per_s") if mesh_reference else None
+    mesh_per_sample = (None if mesh_none is None or mesh_msamples is None
+                       else mesh_none * 1e-3 / (512 * 512) * mesh_msamples * 1e6)
+    aims.append(("`none` at 1 spp within 3× the reference's per-sample cost (512², 100 k-triangle torus)",
+                 times(mesh_per_sample), None if mesh_per_sample is None else mesh_per_sample <= 3))
     lines += ["## Aims", "", "| aim | this run | met |", "|---|---|---|"]
     for aim, value, met in aims:
         lines.append(f"| {aim} | {value} | {'n/a' if met is None else ('yes' if met else 'no')} |")
@@ -153,6 +172,23 @@ def main(json_dir, out_path):
               f"| kernel compile, pipeline creation, first-dispatch JIT (once per process and kernel) | "
               f"{fmt(none_row.get('compile_ms'))} / {fmt(none_row.get('pipeline_ms'))} / {fmt(none_row.get('jit_ms'))} ms |",
               ""]
+
+    lines += ["## Meshes", "",
+              "The triangle BVH on the CPU (`build/bench/triangle_bvh_bench`, binned SAH, median of 3 "
+              "repetitions) and the renderer on a 102,400-triangle torus at 512² "
+              "(`scripts/generate-assets.py --bench`; `renderer_bench` with that scene, the reference at 4×4 "
+              "samples a replicate), each ratio within its own run.", "",
+              "| | this run |", "|---|---:|"]
+    for k, r in sorted(builds.items()):
+        lines.append(f"| BVH build, {k} | {fmt(time_of(r))} ms ({fmt(r['triangles/s'] * 1e-6)} M triangles/s, "
+                     f"depth {fmt(r.get('depth'))}) |")
+    for k, r in sorted(rays.items()):
+        lines.append(f"| CPU ray traversal to the nearest hit, {k} | {fmt(1e9 / r['rays/s'])} ns per ray |")
+    lines.append(f"| `none` frame on the torus, shading (GPU timestamps) | {fmt(mesh_none)} ms |")
+    lines.append(f"| its reference | {fmt(mesh_msamples)} M samples/s |")
+    if mesh_per_sample is not None:
+        lines.append(f"| `none`'s cost per sample over the reference's | {times(mesh_per_sample)} |")
+    lines.append("")
 
     lines += ["## Metrics", "",
               "ZIP-compressed float EXR with 8 channels, the pass of `shimmer metrics` and its parts "

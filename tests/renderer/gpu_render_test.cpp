@@ -184,6 +184,18 @@ TEST(GpuOracle, MeshSphere) {
     for (const char* v : {"none", "tk19", "k16-ggx-rect-stable", "vlachos15"}) ExpectMatchesOracle(scene, v, d);
 }
 
+// The generated mesh shots (experiments/scenes): the grazing plane with its
+// low-poly props and the low-poly torus against the double oracle, with the
+// filters of the TK19 Fig. 1 comparison, from both derivative sources.
+TEST(GpuOracle, GeneratedMeshShots) {
+  const std::string scenes = std::string(SHIMMER_SOURCE_DIR) + "/experiments/scenes/";
+  for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
+    for (const char* v : {"none", "tk19-forward", "k16-beckmann-parallelogram", "k16-beckmann-rect"}) {
+      ExpectMatchesOracle(scenes + "tk19-fig1.json", v, d);
+      ExpectMatchesOracle(scenes + "torus-lowpoly.json", v, d);
+    }
+}
+
 TEST(GpuRender, NormalMapFiltersNeedANormalMap) {
   RenderSettings s = Settings("sphere", "toksvig", DerivativeSource::kQuadFine, 16);
   auto r = Renderer::Create(s);

@@ -196,30 +196,24 @@ void ParseReference(const json& j, Spec& s) {
   if (!r.is_object()) throw SpecError{"reference", "must be {\"spp\": N} or {\"tolerance\": T}"};
   RejectUnknownKeys(r, {"spp", "spp_by_material", "spp_by_scene", "tolerance", "replicates", "converge"}, "reference");
   if (r.contains("spp")) s.reference.spp = PositiveInt(r["spp"], "spp", render::kMaxReferenceSpp);
-  if (r.contains("spp_by_material")) {
-    const json& m = r["spp_by_material"];
-    if (!m.is_object()) throw SpecError{"spp_by_material", "must be {\"MATERIAL\": N, ...}"};
-    std::set<std::string> materials;  // of the top level and every group
-    for (const ShotGroup& group : AllGroups(s)) materials.insert(group.materials.begin(), group.materials.end());
-    for (const auto& [material, spp] : m.items()) {
-      if (!materials.count(material))
-        throw SpecError{"spp_by_material", material + ": not one of the spec's materials" +
-                                               std::string(s.groups.empty() ? "" : " (nor of its groups)")};
-      s.reference_spp_by_material[material] = PositiveInt(spp, "spp_by_material", render::kMaxReferenceSpp);
+  // reference.KEY: {"NAME": N} for names the spec's cross products (the top
+  // level's and every group's) hold in the field `field` of.
+  auto spp_by = [&](const char* key, const char* kind, const char* plural,
+                    std::vector<std::string> ShotGroup::*field, std::map<std::string, int>& out) {
+    if (!r.contains(key)) return;
+    const json& m = r[key];
+    if (!m.is_object()) throw SpecError{key, std::string("must be {\"") + kind + "\": N, ...}"};
+    std::set<std::string> names;
+    for (const ShotGroup& group : AllGroups(s)) names.insert((group.*field).begin(), (group.*field).end());
+    for (const auto& [name, spp] : m.items()) {
+      if (!names.count(name))
+        throw SpecError{key, name + ": not one of the spec's " + plural +
+                                 std::string(s.groups.empty() ? "" : " (nor of its groups)")};
+      out[name] = PositiveInt(spp, key, render::kMaxReferenceSpp);
     }
-  }
-  if (r.contains("spp_by_scene")) {
-    const json& m = r["spp_by_scene"];
-    if (!m.is_object()) throw SpecError{"spp_by_scene", "must be {\"SCENE\": N, ...}"};
-    std::set<std::string> scenes;
-    for (const ShotGroup& group : AllGroups(s)) scenes.insert(group.scenes.begin(), group.scenes.end());
-    for (const auto& [scene, spp] : m.items()) {
-      if (!scenes.count(scene))
-        throw SpecError{"spp_by_scene", scene + ": not one of the spec's scenes" +
-                                            std::string(s.groups.empty() ? "" : " (nor of its groups)")};
-      s.reference_spp_by_scene[scene] = PositiveInt(spp, "spp_by_scene", render::kMaxReferenceSpp);
-    }
-  }
+  };
+  spp_by("spp_by_material", "MATERIAL", "materials", &ShotGroup::materials, s.reference_spp_by_material);
+  spp_by("spp_by_scene", "SCENE", "scenes", &ShotGroup::scenes, s.reference_spp_by_scene);
   if (r.contains("tolerance")) {
     s.reference.tolerance = Number(r["tolerance"], "tolerance");
     if (s.reference.tolerance <= 0 || s.reference.tolerance >= 1) throw SpecError{"tolerance", "must be in (0, 1)"};

@@ -269,7 +269,15 @@ TEST(Spec, BadFitConfigurationsAreRejectedUpFront) {
 }
 
 // The specs the guide runs: each parses, and the ones with fits have them.
+// They are run from the repository's root (scene files are named relative to
+// the current directory: experiments/scenes/...), so they are read from there.
 TEST(Spec, CommittedSpecsParse) {
+  const std::filesystem::path was = std::filesystem::current_path();
+  std::filesystem::current_path(SHIMMER_SOURCE_DIR);
+  struct Back {
+    std::filesystem::path to;
+    ~Back() { std::filesystem::current_path(to); }
+  } back{was};
   int specs = 0;
   for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(SHIMMER_SOURCE_DIR) /
                                                                  "experiments/specs")) {

@@ -228,12 +228,12 @@ std::string DecisionRuleText() {
 
 std::string CellRowOf(const Group& group) {
   if (group.material.rfind("glints", 0) == 0) return "glints";
-  if (!group.rows.empty())
-    if (SceneTraits traits = TraitsOf(*group.rows.front()); !traits.geometry_class.empty())
-      return traits.geometry_class;
-  if (SgLitScene(group)) return "SG-lit";
-  if (NormalMappedScene(group)) return "normal-mapped";
-  if (!group.rows.empty() && TraitsOf(*group.rows.front()).meshes) return "mesh";
+  // One read of the traits (a row stored before they were kept loads its scene file for them).
+  const SceneTraits traits = group.rows.empty() ? SceneTraits{} : TraitsOf(*group.rows.front());
+  if (!traits.geometry_class.empty()) return traits.geometry_class;
+  if (traits.sg_light) return "SG-lit";
+  if (traits.normal_maps) return "normal-mapped";
+  if (traits.meshes) return "mesh";
   return GeometryClass(group.scene);
 }
 
@@ -311,11 +311,11 @@ std::vector<CellAnswer> AnswerCells(const std::vector<const Group*>& groups) {
   auto index = [](const std::vector<std::string>& order, const std::string& name) {
     return int(std::find(order.begin(), order.end(), name) - order.begin());
   };
-  std::set<std::string> present;
-  for (const Group* g : groups) present.insert(CellRowOf(*g));
-  const std::vector<std::string> rows = CellRowsInOrder(present);
-  for (const Group* g : groups)
-    cells[{index(rows, CellRowOf(*g)), index(kBands, RoughnessClass(g->alpha))}].push_back(g);
+  std::vector<std::string> row_of;
+  for (const Group* g : groups) row_of.push_back(CellRowOf(*g));
+  const std::vector<std::string> rows = CellRowsInOrder({row_of.begin(), row_of.end()});
+  for (std::size_t i = 0; i < groups.size(); ++i)
+    cells[{index(rows, row_of[i]), index(kBands, RoughnessClass(groups[i]->alpha))}].push_back(groups[i]);
 
   std::vector<CellAnswer> out;
   for (const auto& [key, members] : cells) {

@@ -135,7 +135,8 @@ void ClassLeaderboards(Document& doc, const std::vector<const Group*>& groups) {
       "counts the tables where the decision rule says so.");
   std::map<std::string, std::vector<const Group*>> by_row;
   std::set<std::string> present;
-  for (const Group* g : groups) by_row[CellRowOf(*g)].push_back(g), present.insert(CellRowOf(*g));
+  for (const Group* g : groups) by_row[CellRowOf(*g)].push_back(g);
+  for (const auto& [row, members] : by_row) present.insert(row);
   for (const std::string& row : CellRowsInOrder(present)) {
     auto it = by_row.find(row);
     if (it == by_row.end()) continue;

@@ -182,8 +182,7 @@ void Fig1OnMeshes(Document& doc, const std::vector<Form>& forms, const std::vect
     }
     if (!complete) continue;
     ++judged;
-    blowup.push_back(Metric(RowOf(*g, forms.front())->metrics, "relmse") /
-                     Metric(RowOf(*g, forms.back())->metrics, "relmse"));
+    blowup.push_back(order.front().first / order.back().first);  // in the forms' order until sorted below
     k16_highest += std::max_element(order.begin(), order.end())->second == forms.front().name;
     if (Fig1OrderingHolds(relmse, 0, forms.size() - 1)) {
       ++holds;

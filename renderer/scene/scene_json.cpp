@@ -68,6 +68,12 @@ class FieldReader {
     *out = x;
     return *this;
   }
+  FieldReader& Bool(const char* key, bool* out) {
+    if (!ok() || !j_.contains(key)) return *this;
+    if (!j_[key].is_boolean()) return FailKey(key, "must be true or false");
+    *out = j_[key].get<bool>();
+    return *this;
+  }
   FieldReader& String(const char* key, std::string* out) {
     if (!ok() || !j_.contains(key)) return *this;
     if (!j_[key].is_string()) return FailKey(key, "must be a string");
@@ -344,7 +350,10 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
     r.String("type", &type);
     if (r.ok() && type == "directional") {
       glm::dvec3 dir{0, 1, 0}, rad{1, 1, 1};
-      r.Keys({"type", "direction", "irradiance"}).Vec3("direction", &dir).Vec3("irradiance", &rad);
+      r.Keys({"type", "direction", "irradiance", "shadows"})
+          .Vec3("direction", &dir)
+          .Vec3("irradiance", &rad)
+          .Bool("shadows", &s.light.shadows);
       if (r.ok() && glm::length(dir) < 1e-9) r.FailKey("direction", "must not be zero");
       if (r.ok() && glm::any(glm::lessThan(rad, glm::dvec3(0)))) r.FailKey("irradiance", "must be >= 0");
       s.light.type = shading::LightType::kDirectional;
@@ -353,15 +362,19 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
     } else if (r.ok() && type == "sphere") {
       s.light.type = shading::LightType::kSphere;
       s.light.radius = 0.05;
-      r.Keys({"type", "center", "intensity", "radius"})
+      r.Keys({"type", "center", "intensity", "radius", "shadows"})
           .Vec3("center", &s.light.vec)
           .Vec3("intensity", &s.light.radiance)
-          .Number("radius", &s.light.radius, 1e-6, kMaxCoordinate);
+          .Number("radius", &s.light.radius, 1e-6, kMaxCoordinate)
+          .Bool("shadows", &s.light.shadows);
       if (r.ok() && glm::any(glm::lessThan(s.light.radiance, glm::dvec3(0)))) r.FailKey("intensity", "must be >= 0");
     } else if (r.ok() && type == "sg") {
       // A distant spherical Gaussian (seed 004): amplitude e^(sharpness (axis.l - 1)).
       glm::dvec3 axis{0, 1, 0}, amplitude{1, 1, 1};
       double sharpness = 0;
+      if (lj.contains("shadows"))
+        r.FailKey("shadows", "an SG light is a distant lobe over the whole sky and casts no hard shadow; "
+                             "use a directional or sphere light");
       r.Keys({"type", "axis", "sharpness", "amplitude"})
           .Require("axis")
           .Require("sharpness")

@@ -111,6 +111,7 @@ int SceneFeatures(const Scene& scene) {
     if (p.type == Primitive::Type::kPlane) mask |= kScenePlanes | (p.bump_slope != 0 ? kSceneBumps : 0);
     if (p.type == Primitive::Type::kMesh) mask |= kSceneMeshes;
   }
+  if (scene.light.shadows) mask |= kSceneShadows;
   return mask;
 }
 

@@ -47,6 +47,7 @@ const int SCENE_PLANES = 4;
 const int SCENE_BUMPS = 8;  // planes with a normal pattern
 const int SCENE_NORMAL_MAPS = 16;  // primitives with a normal map
 const int SCENE_MESHES = 32;  // triangle meshes (with SHIMMER_MESHES)
+const int SCENE_SHADOWS = 64;  // the light casts shadows: every shaded point traces a ray to it
 #ifndef SHIMMER_SCENE_FEATURES
 const int SCENE_FEATURES =
     SCENE_SPHERES | SCENE_CAPSULES | SCENE_PLANES | SCENE_BUMPS | SCENE_NORMAL_MAPS | SCENE_MESHES;
@@ -327,12 +328,16 @@ real meshBoxEntry(vec3 o, vec3 invD, vec4 lo, vec4 hi, real tmax) {
 }
 
 // The nearest triangle of the mesh at header word `header` with
-// RAY_TMIN < t < tmax. A stack rather than scene.glsl's stackless walk: the
+// RAY_TMIN < t < tmax, or at t == tmax with a word below `best` (the hit so
+// far: a lower triangle word wins a tie, whichever mesh holds it, so that a
+// pixel's candidate list, walked in another order, finds the same triangle;
+// primitive numbers lie below every triangle word); else `best` and tmax.
+// A stack rather than scene.glsl's stackless walk: the
 // nearer child goes first, so that hits found there cull the farther
 // subtree, which on a mesh of many triangles saves most of the boxes.
-MeshHit traceMesh(int header, vec3 o, vec3 d, real tmax) {
+MeshHit traceMesh(int header, vec3 o, vec3 d, real tmax, int best) {
   MeshHit h;
-  h.word = -1;
+  h.word = best;
   h.t = tmax;
   vec4 hw = sceneWord(header);
   int nodes = int(hw.x);
@@ -431,11 +436,9 @@ Hit traceScene(vec3 o, vec3 d) {
       }
 #ifdef SHIMMER_MESHES
       if (isMesh(loadPrim(prim))) {
-        MeshHit m = traceMesh(meshHeaderOf(prim), o, d, hit.t);
-        if (m.word >= 0) {
-          hit.t = m.t;
-          hit.prim = m.word;
-        }
+        MeshHit m = traceMesh(meshHeaderOf(prim), o, d, hit.t, hit.prim);
+        hit.t = m.t;
+        hit.prim = m.word;
       }
 #endif
     }
@@ -450,15 +453,46 @@ Hit traceScene(vec3 o, vec3 d) {
 // finds the primitives that cone touches once per pixel and tests only those
 // per sample: one BVH walk instead of N x N. A conservative test keeps the
 // result exactly that of traceScene (same primitives, same order, same ties).
+// A mesh's triangles are candidates too: the pixel walks the mesh's BVH once
+// with the pyramid of its corner rays (tighter than the cone for the long,
+// thin and large triangles of meshes), and its samples test the triangles it
+// kept instead of each walking the BVH.
 
+#ifdef SHIMMER_MESHES
+// A ray through a torus crosses four surfaces, each a triangle or two in a
+// pixel: a mesh kernel keeps eight.
+const int PIXEL_CANDIDATES = 8;  // more: the pixel's samples walk the BVH
+#else
 const int PIXEL_CANDIDATES = 4;  // more: the pixel's samples walk the BVH
+#endif
 
 struct PixelCone {
   vec3 o;
   vec3 axis;
   real cosA;  // half-angle, slightly widened
   real sinA;
+#ifdef SHIMMER_MESHES
+  // The pyramid of the pixel's corner rays, which holds every sample ray (a
+  // camera ray's direction is affine in the pixel position before it is
+  // normalised): its side planes through o, normals pointing in.
+  vec3 side0;
+  vec3 side1;
+  vec3 side2;
+  vec3 side3;
+  vec3 corner0;  // the corner rays' unit directions
+  vec3 corner1;
+  vec3 corner2;
+  vec3 corner3;
+#endif
 };
+
+#ifdef SHIMMER_MESHES
+// The inward normal of the side plane through o spanned by corner rays a, b.
+vec3 pyramidSide(vec3 a, vec3 b, vec3 axis) {
+  vec3 n = normalize(cross(a, b));
+  return dot(n, axis) >= real(0) ? n : -n;
+}
+#endif
 
 PixelCone pixelCone(Camera c, ivec2 px) {
   vec2 base = vec2(real(px.x), real(px.y));
@@ -473,6 +507,20 @@ PixelCone pixelCone(Camera c, ivec2 px) {
   // rays must never drop a primitive a sample ray hits.
   k.sinA = min(sqrt(max(real(1) - cosA * cosA, real(0))) * real(1.001) + real(1e-5), real(1));
   k.cosA = sqrt(real(1) - k.sinA * k.sinA);
+#ifdef SHIMMER_MESHES
+  vec3 d00 = cameraRay(c, base).d;
+  vec3 d10 = cameraRay(c, base + vec2(real(1), real(0))).d;
+  vec3 d11 = cameraRay(c, base + vec2(real(1), real(1))).d;
+  vec3 d01 = cameraRay(c, base + vec2(real(0), real(1))).d;
+  k.side0 = pyramidSide(d00, d10, k.axis);
+  k.side1 = pyramidSide(d10, d11, k.axis);
+  k.side2 = pyramidSide(d11, d01, k.axis);
+  k.side3 = pyramidSide(d01, d00, k.axis);
+  k.corner0 = d00;
+  k.corner1 = d10;
+  k.corner2 = d11;
+  k.corner3 = d01;
+#endif
   return k;
 }
 
@@ -524,6 +572,16 @@ struct PixelCandidates {
   Prim p1;
   Prim p2;
   Prim p3;
+#ifdef SHIMMER_MESHES
+  int id4;
+  int id5;
+  int id6;
+  int id7;
+  Prim p4;
+  Prim p5;
+  Prim p6;
+  Prim p7;
+#endif
 };
 
 PixelCandidates withCandidate(PixelCandidates l, int id) {
@@ -531,9 +589,109 @@ PixelCandidates withCandidate(PixelCandidates l, int id) {
   if (l.count == 1) l.id1 = id;
   if (l.count == 2) l.id2 = id;
   if (l.count == 3) l.id3 = id;
+#ifdef SHIMMER_MESHES
+  if (l.count == 4) l.id4 = id;
+  if (l.count == 5) l.id5 = id;
+  if (l.count == 6) l.id6 = id;
+  if (l.count == 7) l.id7 = id;
+#endif
   l.count = l.count + 1;
   return l;
 }
+
+#ifdef SHIMMER_MESHES
+// Slack of the pyramid tests relative to the distance from the eye: rounding
+// in the corner rays and the cross products must never drop a triangle a
+// sample ray hits (a pixel spans about 1e-2 radians; this widens it by ~1 %).
+const real PYRAMID_SLACK = real(1e-4);
+
+// Whether point q lies outside the side plane of normal n by more than the slack.
+bool outsideSide(PixelCone k, vec3 n, vec3 q) {
+  vec3 v = q - k.o;
+  return dot(n, v) < -PYRAMID_SLACK * length(v);
+}
+
+// Whether the box lo..hi lies wholly outside one side plane of the pixel's
+// pyramid (its corner farthest along the normal is outside).
+bool boxOutsidePyramid(PixelCone k, vec3 lo, vec3 hi) {
+  vec3 c = (lo + hi) * real(0.5);
+  vec3 e = (hi - lo) * real(0.5);
+  real slack = PYRAMID_SLACK * (length(c - k.o) + length(e));
+  return dot(k.side0, c - k.o) + dot(abs(k.side0), e) < -slack ||
+         dot(k.side1, c - k.o) + dot(abs(k.side1), e) < -slack ||
+         dot(k.side2, c - k.o) + dot(abs(k.side2), e) < -slack ||
+         dot(k.side3, c - k.o) + dot(abs(k.side3), e) < -slack;
+}
+
+// Whether the pixel's corner rays all lie outside the plane through the eye
+// and the triangle's edge a-b, on the side away from its corner c: then no
+// ray of the pixel meets the triangle. (The rays that meet a triangle form
+// the cone of these three planes; two convex cones with one apex are apart
+// exactly when a face plane of one of them separates them, so with the side
+// planes this is the separating-axis test of the two cones.)
+bool pyramidOutsideEdge(PixelCone k, vec3 a, vec3 b, vec3 c) {
+  vec3 m = cross(a - k.o, b - k.o);
+  real len = length(m);
+  real side = dot(m, c - k.o);
+  // The eye near the triangle's plane: the edge decides nothing.
+  if (!(abs(side) > PYRAMID_SLACK * len * length(c - k.o))) return false;
+  m = (side > real(0) ? m : -m) / len;
+  return dot(m, k.corner0) < -PYRAMID_SLACK && dot(m, k.corner1) < -PYRAMID_SLACK &&
+         dot(m, k.corner2) < -PYRAMID_SLACK && dot(m, k.corner3) < -PYRAMID_SLACK;
+}
+
+// Whether no ray of the pixel meets the triangle: its three corners lie
+// outside one side plane of the pyramid, or the pyramid outside one edge's plane.
+bool triangleOutsidePyramid(PixelCone k, vec3 a, vec3 b, vec3 c) {
+  return (outsideSide(k, k.side0, a) && outsideSide(k, k.side0, b) && outsideSide(k, k.side0, c)) ||
+         (outsideSide(k, k.side1, a) && outsideSide(k, k.side1, b) && outsideSide(k, k.side1, c)) ||
+         (outsideSide(k, k.side2, a) && outsideSide(k, k.side2, b) && outsideSide(k, k.side2, c)) ||
+         (outsideSide(k, k.side3, a) && outsideSide(k, k.side3, b) && outsideSide(k, k.side3, c)) ||
+         pyramidOutsideEdge(k, a, b, c) || pyramidOutsideEdge(k, b, c, a) || pyramidOutsideEdge(k, c, a, b);
+}
+
+// l with the triangles of the mesh at `header` that the pixel's pyramid may
+// hold, walked as traceMesh walks (any order would do: triangles tie by
+// word). Stops once the list is past PIXEL_CANDIDATES.
+PixelCandidates withMeshCandidates(PixelCandidates l, PixelCone k, int header) {
+  vec4 hw = sceneWord(header);
+  int nodes = int(hw.x);
+  int firstNode = int(hw.y);
+  int firstTri = int(hw.z);
+  int stack[MESH_STACK];
+  int sp = 0;
+  int node = nodes > 0 ? 0 : -1;
+  while (node >= 0 && l.count <= PIXEL_CANDIDATES) {
+    vec4 n0 = sceneWord(firstNode + 2 * node);
+    vec4 n1 = sceneWord(firstNode + 2 * node + 1);
+    int next = -1;
+    if (!boxOutsidePyramid(k, vec3(n0.x, n0.y, n0.z), vec3(n1.x, n1.y, n1.z))) {
+      int offset = int(n0.w);
+      int count = int(n1.w);
+      if (count > 0) {
+        for (int i = 0; i < count; i++) {
+          int w = firstTri + 3 * (offset + i);
+          vec4 w0 = sceneWord(w);
+          vec4 w1 = sceneWord(w + 1);
+          vec4 w2 = sceneWord(w + 2);
+          if (!triangleOutsidePyramid(k, vec3(w0.x, w0.y, w0.z), vec3(w1.x, w1.y, w1.z), vec3(w2.x, w2.y, w2.z)))
+            l = withCandidate(l, w);
+        }
+      } else {
+        next = node + 1;
+        stack[sp] = offset;
+        sp++;
+      }
+    }
+    if (next < 0 && sp > 0) {
+      sp--;
+      next = stack[sp];
+    }
+    node = next;
+  }
+  return l;
+}
+#endif
 
 PixelCandidates pixelCandidates(PixelCone k) {
   PixelCandidates l;
@@ -542,6 +700,12 @@ PixelCandidates pixelCandidates(PixelCone k) {
   l.id1 = -1;
   l.id2 = -1;
   l.id3 = -1;
+#ifdef SHIMMER_MESHES
+  l.id4 = -1;
+  l.id5 = -1;
+  l.id6 = -1;
+  l.id7 = -1;
+#endif
   vec4 header = sceneWord(0);
   int bvhPrims = int(header.x);
   int nodes = int(header.y);
@@ -557,8 +721,8 @@ PixelCandidates pixelCandidates(PixelCone k) {
     int prim = int(n1.w) - 1;
     if (inCone && prim >= 0 && coneTouchesPrim(k, loadPrim(prim))) l = withCandidate(l, prim);
 #ifdef SHIMMER_MESHES
-    // A mesh is no candidate (its hits are triangles): the pixel's samples walk the BVH.
-    if (inCone && prim >= 0 && isMesh(loadPrim(prim))) l.count = l.count + PIXEL_CANDIDATES + 1;
+    // A mesh is no candidate (its hits are triangles): its triangles in the pixel's pyramid are.
+    if (inCone && prim >= 0 && isMesh(loadPrim(prim))) l = withMeshCandidates(l, k, meshHeaderOf(prim));
 #endif
     node = inCone && prim < 0 ? node + 1 : int(n0.w);
   }
@@ -566,10 +730,33 @@ PixelCandidates pixelCandidates(PixelCone k) {
   l.p1 = loadPrim(max(l.id1, 0));
   l.p2 = loadPrim(max(l.id2, 0));
   l.p3 = loadPrim(max(l.id3, 0));
+#ifdef SHIMMER_MESHES
+  l.p4 = loadPrim(max(l.id4, 0));
+  l.p5 = loadPrim(max(l.id5, 0));
+  l.p6 = loadPrim(max(l.id6, 0));
+  l.p7 = loadPrim(max(l.id7, 0));
+#endif
   return l;
 }
 
+#ifdef SHIMMER_MESHES
+// nearerHit for the triangle at word `id` (p its loaded corners 0 and 1).
+Hit nearerTriangleHit(Hit h, Prim p, int id, vec3 o, vec3 d) {
+  vec4 w2 = sceneWord(id + 2);
+  real t = intersectTriangle(shearedRay(d), o, p.a, p.b, vec3(w2.x, w2.y, w2.z));
+  // A tie between triangles goes to the lower word, as in traceMesh.
+  if (t > real(0) && (t < h.t || (t == h.t && id < h.prim))) {
+    h.t = t;
+    h.prim = id;
+  }
+  return h;
+}
+#endif
+
 Hit nearerHit(Hit h, Prim p, int id, vec3 o, vec3 d) {
+#ifdef SHIMMER_MESHES
+  if (isTriangle(p)) return nearerTriangleHit(h, p, id, o, d);
+#endif
   real t = intersectPrim(p, o, d);
   if (t > real(0) && t < h.t) {
     h.t = t;
@@ -583,6 +770,12 @@ Prim candidatePrim(PixelCandidates l, int id) {
   if (id == l.id1) return l.p1;
   if (id == l.id2) return l.p2;
   if (id == l.id3) return l.p3;
+#ifdef SHIMMER_MESHES
+  if (id == l.id4) return l.p4;
+  if (id == l.id5) return l.p5;
+  if (id == l.id6) return l.p6;
+  if (id == l.id7) return l.p7;
+#endif
   return l.p0;
 }
 
@@ -595,8 +788,15 @@ Hit traceCandidates(PixelCandidates l, vec3 o, vec3 d) {
   // A loop to the pixel's count rather than four tests: a SIMD batch stops
   // at its lanes' largest count, usually 1-2 (plane, sphere).
   for (int i = 0; i < l.count; i++) {
+#ifdef SHIMMER_MESHES
+    Prim p = i < 4 ? (i == 0 ? l.p0 : (i == 1 ? l.p1 : (i == 2 ? l.p2 : l.p3)))
+                   : (i == 4 ? l.p4 : (i == 5 ? l.p5 : (i == 6 ? l.p6 : l.p7)));
+    int id = i < 4 ? (i == 0 ? l.id0 : (i == 1 ? l.id1 : (i == 2 ? l.id2 : l.id3)))
+                   : (i == 4 ? l.id4 : (i == 5 ? l.id5 : (i == 6 ? l.id6 : l.id7)));
+#else
     Prim p = i == 0 ? l.p0 : (i == 1 ? l.p1 : (i == 2 ? l.p2 : l.p3));
     int id = i == 0 ? l.id0 : (i == 1 ? l.id1 : (i == 2 ? l.id2 : l.id3));
+#endif
     h = nearerHit(h, p, id, o, d);
   }
   return h;

@@ -46,7 +46,7 @@ FilteredNdf variantAt(int variant, int ndf, vec2 alpha, ShadingFootprint f, Vari
 }
 }  // namespace glsl_f64
 
-static_assert(kPixelCandidates == glsl_f32::PIXEL_CANDIDATES);
+static_assert(kMeshPixelCandidates == glsl_f32::PIXEL_CANDIDATES);  // the oracle compiles the mesh code
 static_assert(int(GlintMode::kFiltered) == glsl_f32::GLINT_FILTERED && int(GlintMode::kPoint) == glsl_f32::GLINT_POINT &&
               int(GlintMode::kNaive) == glsl_f32::GLINT_NAIVE && int(GlintMode::kSmooth) == glsl_f32::GLINT_SMOOTH);
 static_assert(int(GlintMode::kCounting) == glsl_f32::GLINT_COUNTING && int(GlintMode::kDb23) == glsl_f32::GLINT_DB23);
@@ -55,7 +55,8 @@ static_assert(kNormalMapFilterStride == glsl_f32::NMF_STRIDE);
 static_assert(int(LightType::kSg) == glsl_f32::LIGHT_SG && int(LightType::kSphere) == glsl_f32::LIGHT_SPHERE);
 static_assert(kSceneSpheres == glsl_f32::SCENE_SPHERES && kSceneCapsules == glsl_f32::SCENE_CAPSULES &&
               kScenePlanes == glsl_f32::SCENE_PLANES && kSceneBumps == glsl_f32::SCENE_BUMPS &&
-              kSceneNormalMaps == glsl_f32::SCENE_NORMAL_MAPS && kSceneMeshes == glsl_f32::SCENE_MESHES);
+              kSceneNormalMaps == glsl_f32::SCENE_NORMAL_MAPS && kSceneMeshes == glsl_f32::SCENE_MESHES &&
+              kSceneShadows == glsl_f32::SCENE_SHADOWS);
 
 namespace {
 
@@ -493,6 +494,8 @@ PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc&
                        const Params<double>& params, glm::ivec2 px) {
   using namespace glsl_f64;
   g_scene_words = scene_words;
+  // Every primitive kind (absent kinds cost the CPU nothing); shadows where the light casts them.
+  g_scene_features = kAllSceneFeatures | (light.shadows ? kSceneShadows : 0);
   Camera c = GlslCamera<Camera>(camera);
   Light l;
   l.type = static_cast<int>(light.type);
@@ -509,6 +512,7 @@ PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc&
   const auto p = GlslVariantParams<VariantParams>(params);
   PixelResult r = renderPixelOracle(c, l, m, variant, static_cast<int>(derivatives), p, px);
   g_scene_words = {};
+  g_scene_features = kAllSceneFeatures;
   PixelOracle o;
   o.hit = r.s.prim >= 0;
   o.prim = r.s.prim;

@@ -196,6 +196,25 @@ TEST(GpuOracle, GeneratedMeshShots) {
     }
 }
 
+// A scene whose light casts shadows: its kernel traces a shadow ray from
+// every shaded point, the oracle does too, on analytic shapes and a mesh.
+TEST(GpuOracle, ShadowedScenes) {
+  shimmer::testing::TempDir dir;
+  const std::string scenes = std::string(SHIMMER_SOURCE_DIR) + "/experiments/scenes/";
+  std::ofstream(dir / "ball.json") << R"({"primitives": [{"type": "sphere", "center": [0, 0.6, 0], "radius": 0.4},
+      {"type": "plane", "height": 0}], "light": {"direction": [0.3, 1, 0.2], "shadows": true},
+      "camera": {"target": [0, 0.2, 0], "distance": 4, "elevation_deg": 40}})";
+  std::ofstream(dir / "torus.json") << R"({"assets": [{"file": ")" + scenes +
+                                           R"(torus-lowpoly.gltf"}], "primitives": [{"type": "plane", "height": -0.5}],
+      "light": {"type": "sphere", "center": [1, 3, 1], "intensity": [9, 9, 9], "shadows": true},
+      "camera": {"distance": 4, "elevation_deg": 35}})";
+  for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
+    for (const char* v : {"none", "tk19"}) {
+      ExpectMatchesOracle((dir / "ball.json").string(), v, d);
+      ExpectMatchesOracle((dir / "torus.json").string(), v, d);
+    }
+}
+
 TEST(GpuRender, NormalMapFiltersNeedANormalMap) {
   RenderSettings s = Settings("sphere", "toksvig", DerivativeSource::kQuadFine, 16);
   auto r = Renderer::Create(s);

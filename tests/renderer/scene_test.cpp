@@ -87,6 +87,20 @@ TEST(SceneJson, LoadsPrimitivesLightMaterialCamera) {
   EXPECT_EQ(s->light.type, shading::LightType::kSphere);
   EXPECT_EQ(s->material.ndf, shading::Ndf::kBeckmann);
   EXPECT_DOUBLE_EQ(s->rig.distance, 7);
+  EXPECT_FALSE(s->light.shadows);
+  EXPECT_EQ(SceneFeatures(*s) & shading::kSceneShadows, 0);
+}
+
+// A light casts shadows where the scene asks; only then does the kernel
+// trace shadow rays (its feature mask says so).
+TEST(SceneJson, ALightCastsShadowsWhereTheSceneAsks) {
+  for (const char* light : {R"({"direction": [0, 1, 0], "shadows": true})",
+                            R"({"type": "sphere", "center": [0, 5, 0], "intensity": [9, 9, 9], "shadows": true})"}) {
+    auto s = ParseSceneJson(std::string(R"({"primitives": [{"type": "plane"}], "light": )") + light + "}", "s.json");
+    ASSERT_TRUE(s.ok()) << s.error();
+    EXPECT_TRUE(s->light.shadows) << light;
+    EXPECT_NE(SceneFeatures(*s) & shading::kSceneShadows, 0) << light;
+  }
 }
 
 // Each malformed file gets one message that names the file and the JSON
@@ -150,6 +164,10 @@ TEST(SceneJson, EveryErrorNamesTheFileAndTheJsonPointerOfTheKey) {
        "/light/radius: must be a number in [1e-06, 1e+06]"},
       {R"({"primitives": [SPHERE], "light": {"type": "sg", "axis": [0, 1, 0], "amplitude": [1, 1, 1]}})",
        "/light/sharpness: is required"},
+      {R"({"primitives": [SPHERE], "light": {"shadows": 1}})", "/light/shadows: must be true or false"},
+      {R"({"primitives": [SPHERE], "light": {"type": "sg", "axis": [0, 1, 0], "sharpness": 5, "amplitude": [1, 1, 1],
+                                              "shadows": true}})",
+       "/light/shadows: an SG light is a distant lobe"},
       {R"({"primitives": [SPHERE], "material": 0.05})", "/material: must be a spec string"},
       {R"({"primitives": [SPHERE], "material": "ggx:7"})", "/material: material 'ggx:7'"},
       {R"({"primitives": [SPHERE], "camera": "far"})", "/camera: must be an object"},

@@ -106,6 +106,10 @@ struct LightDesc {
   glm::dvec3 vec{0, 1, 0};       // unit direction towards the light, the sphere's centre, or the SG's axis
   glm::dvec3 radiance{1, 1, 1};  // irradiance at normal incidence, intensity, or the SG's amplitude (radiance)
   double radius = 0;             // sphere: radius; SG: sharpness lambda
+  // Hard shadows: a ray from each shaded point towards the light (the
+  // sphere's centre); directional and sphere lights only. Off, no kernel
+  // traces one (SCENE_SHADOWS).
+  bool shadows = false;
 };
 // "directional", "sphere", "sg".
 std::string_view LightTypeName(LightType type);
@@ -188,8 +192,9 @@ PixelOracle ShadePixel(std::span<const glm::vec4> scene_words, const CameraDesc&
 // The nearest primitive along the ray through sub-pixel position `offset`
 // ([0,1]^2) of pixel px, found two ways: by the full BVH walk (traceScene) and
 // by the pixel's candidate list (traceCandidates), which the reference kernel
-// uses. In float, as on the GPU. `candidates` > kPixelCandidates means the
-// kernel walks the BVH for that pixel.
+// uses. In float, as on the GPU. `candidates` above the kernel's limit
+// (kPixelCandidates, or kMeshPixelCandidates for a scene with meshes) means
+// the kernel walks the BVH for each sample of that pixel.
 struct PixelTraceCheck {
   int scene_prim = -1;
   float scene_t = 0;
@@ -197,7 +202,8 @@ struct PixelTraceCheck {
   float candidate_t = 0;
   int candidates = 0;
 };
-inline constexpr int kPixelCandidates = 4;  // PIXEL_CANDIDATES of scene.glsl
+inline constexpr int kPixelCandidates = 4;  // PIXEL_CANDIDATES of scene.glsl, a kernel without meshes
+inline constexpr int kMeshPixelCandidates = 8;  // PIXEL_CANDIDATES of a kernel with meshes (and of this oracle)
 
 // SCENE_* of scene.glsl: bits of the mask of primitive kinds a scene holds,
 // which specialises the kernel (shading_glsl.cpp checks that they agree).
@@ -207,6 +213,7 @@ inline constexpr int kScenePlanes = 4;
 inline constexpr int kSceneBumps = 8;  // planes with a normal pattern
 inline constexpr int kSceneNormalMaps = 16;
 inline constexpr int kSceneMeshes = 32;
+inline constexpr int kSceneShadows = 64;  // the light casts shadows (LightDesc::shadows), not a primitive kind
 inline constexpr int kAllSceneFeatures =
     kSceneSpheres | kSceneCapsules | kScenePlanes | kSceneBumps | kSceneNormalMaps | kSceneMeshes;
 // --- Normal maps (normal_map.glsl, scene.glsl), in double ---------------------

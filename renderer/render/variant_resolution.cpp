@@ -42,13 +42,6 @@ Result<ResolvedVariant> ResolveVariant(const RenderSettings& s) {
     return R::Failure("variant " + s.variant + " filters normal maps, and scene '" + s.scene.name +
                       "' has none (use a scene with a normal map, such as nm-plane)");
   if (auto mismatch = shading::MaterialMismatch(info, s.material.ndf)) return R::Failure(*mismatch);
-  // glints-db23's kernel stalls lavapipe's shader compiler (LLVM 15's loop
-  // analysis did not return in minutes): until it is restructured, the model
-  // lives in C++ (count-law tests, the oracle) and the renderer says so.
-  if (info.cpu_only)
-    return R::Failure("variant " + s.variant +
-                      " is a C++ model only for now (tests and the CPU oracle): its GPU kernel does not build on "
-                      "lavapipe yet (docs/glints.md)");
   auto params = shading::ResolveParams(info, s.param_overrides);
   if (!params) return params.failure();
   v.name = s.variant;

@@ -458,15 +458,17 @@ real glintDb23Grid(GlintMaterial g, int level, int e, int k, vec2 p, vec2 hpp, r
   vec2 f = s - s0;
   ivec2 c = ivec2(s0);
   uint grid = glintHash(uint(k) ^ glintHash(uint(e) ^ glintHash(uint(level) + 0x632be5abu)));
+  bool lower = f.x + f.y < real(1);  // the triangle (c, c + x, c + y), else (c + x + y, c + x, c + y)
   real count = real(0);
-  if (f.x + f.y < real(1)) {
-    count += glintCellCount(g, glintGridCellHash(grid, c), hpp, n * (real(1) - f.x - f.y), w);
-    count += glintCellCount(g, glintGridCellHash(grid, c + ivec2(1, 0)), hpp, n * f.x, w);
-    count += glintCellCount(g, glintGridCellHash(grid, c + ivec2(0, 1)), hpp, n * f.y, w);
-  } else {
-    count += glintCellCount(g, glintGridCellHash(grid, c + ivec2(1, 1)), hpp, n * (f.x + f.y - real(1)), w);
-    count += glintCellCount(g, glintGridCellHash(grid, c + ivec2(1, 0)), hpp, n * (real(1) - f.y), w);
-    count += glintCellCount(g, glintGridCellHash(grid, c + ivec2(0, 1)), hpp, n * (real(1) - f.x), w);
+  // One loop over the 3 cells, not 3 calls: each inlined copy of the
+  // cell's 4 binomial draws multiplies the kernel, and 30 copies (2 levels,
+  // up to 5 grids, 3 cells) stalled lavapipe's compiler for minutes.
+  SHIMMER_DONT_UNROLL
+  for (int i = 0; i < 3; i++) {
+    ivec2 cell = i == 0 ? (lower ? c : c + ivec2(1, 1)) : (i == 1 ? c + ivec2(1, 0) : c + ivec2(0, 1));
+    real weight = i == 0 ? (lower ? real(1) - f.x - f.y : f.x + f.y - real(1))
+                         : (i == 1 ? (lower ? f.x : real(1) - f.y) : (lower ? f.y : real(1) - f.x));
+    count += glintCellCount(g, glintGridCellHash(grid, cell), hpp, n * weight, w);
   }
   return count;
 }
@@ -520,11 +522,13 @@ real glintDb23Level(GlintMaterial g, int level, GlintEllipse el, real cellMinor,
   int turns1 = 2 * turns0;
   int kT1 = 2 * k + 2 == turns1 ? 0 : 2 * k + 2;
   real count = real(0);
-  if (wB0 > real(0)) count += glintDb23Grid(g, level, e0, kB0, p, hpp, n * wB0, w);
-  if (wB1 > real(0)) count += glintDb23Grid(g, level, e0, kB1, p, hpp, n * wB1, w);
-  if (wT0 > real(0)) count += glintDb23Grid(g, level, e0 + 1, 2 * k, p, hpp, n * wT0, w);
-  if (wTh > real(0)) count += glintDb23Grid(g, level, e0 + 1, 2 * k + 1, p, hpp, n * wTh, w);
-  if (wT1 > real(0)) count += glintDb23Grid(g, level, e0 + 1, kT1, p, hpp, n * wT1, w);
+  SHIMMER_DONT_UNROLL
+  for (int i = 0; i < 5; i++) {  // B0, B1, T0, Th, T1: one copy of the grid's code
+    real weight = i == 0 ? wB0 : (i == 1 ? wB1 : (i == 2 ? wT0 : (i == 3 ? wTh : wT1)));
+    int ratio = i < 2 ? e0 : e0 + 1;
+    int turn = i == 0 ? kB0 : (i == 1 ? kB1 : (i == 2 ? 2 * k : (i == 3 ? 2 * k + 1 : kT1)));
+    if (weight > real(0)) count += glintDb23Grid(g, level, ratio, turn, p, hpp, n * weight, w);
+  }
   return count;
 }
 
@@ -560,8 +564,11 @@ GlintCount glintCountedDraws(int mode, GlintMaterial g, vec2 hpp, GlintFootprint
   real level = clamp(log2(cellMinor), real(0), real(GLINT_MAX_LEVEL));
   int l0 = min(int(floor(level)), GLINT_MAX_LEVEL - 1);
   real t = level - real(l0);
-  o.count = glintDb23Level(g, l0, el, cellMinor, p, hpp, o.total * (real(1) - t), w) +
-            glintDb23Level(g, l0 + 1, el, cellMinor, p, hpp, o.total * t, w);
+  real levels[2];  // the two levels' counts, summed as the C++ model sums them
+  SHIMMER_DONT_UNROLL
+  for (int i = 0; i < 2; i++)
+    levels[i] = glintDb23Level(g, l0 + i, el, cellMinor, p, hpp, o.total * (i == 0 ? real(1) - t : t), w);
+  o.count = levels[0] + levels[1];
   return o;
 }
 

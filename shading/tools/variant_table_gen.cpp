@@ -85,7 +85,7 @@ struct Table {
 };
 
 const std::set<std::string> kFlags = {"widens_roughness", "ggx_only",    "glints",
-                                       "reads_footprint",  "sg_light", "smooth_limit", "cpu_only"};
+                                       "reads_footprint",  "sg_light", "smooth_limit"};
 
 Filter ReadFilter(const json& e, const std::string& where, const Table& t, bool normal_map) {
   Filter f;
@@ -247,8 +247,7 @@ std::string Source(const Table& t) {
       s << (i ? ", " : "") << "{" << Quoted(f.params[i].name) << ", " << Literal(f.params[i].value) << ", "
         << Quoted(f.params[i].meaning) << "}";
     s << "},\n";
-    const char* flags[] = {"widens_roughness", "ggx_only", "glints", "reads_footprint", "sg_light", "smooth_limit",
-                           "cpu_only"};
+    const char* flags[] = {"widens_roughness", "ggx_only", "glints", "reads_footprint", "sg_light", "smooth_limit"};
     for (std::size_t i = 0; i < std::size(flags); ++i)
       s << "       ." << flags[i] << " = " << (f.flags.count(flags[i]) ? "true" : "false")
         << (i + 1 < std::size(flags) ? ",\n" : "},\n");

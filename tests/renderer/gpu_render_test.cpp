@@ -228,20 +228,12 @@ TEST(GpuRender, NormalMapFiltersNeedANormalMap) {
 // 2 % of pixels allowed), the footprint from the quad and from ray
 // differentials, and a grazing plane and a sphere.
 TEST(GpuOracle, GlintScenes) {
-  for (const char* v : {"none", "glints-zk16", "glints-naive", "glints-smooth", "glints-zk16-counting"})
+  for (const char* v : {"none", "glints-zk16", "glints-naive", "glints-smooth", "glints-zk16-counting", "glints-db23"})
     ExpectMatchesOracle("glint-plane", v, DerivativeSource::kQuadFine);
-  for (const char* v : {"glints-zk16", "glints-zk16-counting"}) {
+  for (const char* v : {"glints-zk16", "glints-zk16-counting", "glints-db23"}) {
     ExpectMatchesOracle("glint-sphere", v, DerivativeSource::kQuadFine);
     ExpectMatchesOracle("glint-sphere", v, DerivativeSource::kAnalytic);
   }
-}
-
-// glints-db23 is a C++ model for now (its kernel stalls lavapipe's shader
-// compiler): the renderer refuses it with one message rather than hang.
-TEST(GpuRender, ACpuOnlyVariantIsRefusedByTheRenderer) {
-  auto r = Renderer::Create(Settings("glint-plane", "glints-db23", DerivativeSource::kQuadFine, 8));
-  ASSERT_FALSE(r);
-  EXPECT_NE(r.error().find("is a C++ model only"), std::string::npos) << r.error();
 }
 
 TEST(GpuRender, GlintVariantsAndGlintMaterialsGoTogether) {

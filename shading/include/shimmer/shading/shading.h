@@ -275,7 +275,6 @@ struct VariantInfo {
   bool reads_footprint = false;  // its pixels read screen-space derivatives
   bool sg_light = false;         // shades SG lights only (seed 004's warps)
   bool smooth_limit = false;     // a glint material's limit without sparkles (D_g): never its pick
-  bool cpu_only = false;         // a C++ model (tests, oracle) whose kernel the renderer does not build yet
 };
 
 std::span<const VariantInfo> Variants();

@@ -310,20 +310,18 @@ TORUS_CAMERA = {"target": [0, 0, 0], "distance": 5.5, "elevation_deg": 35, "azim
 TORUS_LIGHT = {"type": "directional", "direction": [0.4, 0.8, 0.45], "irradiance": [1, 1, 1]}
 
 
-def write_torus_lowpoly(out):
+def write_torus_shot(out, name, geometry_class, around, tube, glb):
+    """The torus of major radius 1 and minor 0.4 at `around` x `tube` quads, as
+    a .glb or as a .gltf with an external .bin buffer, and its scene."""
     g = Gltf()
-    g.node("torus", g.mesh("torus 12x6", *torus(1.0, 0.4, 12, 6)))
-    g.write_gltf(os.path.join(out, "torus-lowpoly.gltf"), "torus-lowpoly.bin")
-    write_scene(out, "torus-lowpoly", "low-poly mesh", {"assets": [{"file": "torus-lowpoly.gltf"}], "light": TORUS_LIGHT,
-                                       "material": "ggx:0.05", "camera": TORUS_CAMERA})
-
-
-def write_torus_fine(out):
-    g = Gltf()
-    g.node("torus", g.mesh("torus 192x96", *torus(1.0, 0.4, 192, 96)))
-    g.write_glb(os.path.join(out, "torus-fine.glb"))
-    write_scene(out, "torus-fine", "fine mesh", {"assets": [{"file": "torus-fine.glb"}], "light": TORUS_LIGHT,
-                                    "material": "ggx:0.05", "camera": TORUS_CAMERA})
+    g.node("torus", g.mesh("torus %dx%d" % (around, tube), *torus(1.0, 0.4, around, tube)))
+    asset = name + (".glb" if glb else ".gltf")
+    if glb:
+        g.write_glb(os.path.join(out, asset))
+    else:
+        g.write_gltf(os.path.join(out, asset), name + ".bin")
+    write_scene(out, name, geometry_class, {"assets": [{"file": asset}], "light": TORUS_LIGHT, "material": "ggx:0.05",
+                                            "camera": TORUS_CAMERA})
 
 
 def write_panel(out):
@@ -396,11 +394,7 @@ def write_tk19_fig1(out):
 
 def write_bench_torus(out):
     """320 x 160 quads: 102,400 triangles, for the renderer's mesh aims."""
-    g = Gltf()
-    g.node("torus", g.mesh("torus 320x160", *torus(1.0, 0.4, 320, 160)))
-    g.write_glb(os.path.join(out, "torus-100k.glb"))
-    write_scene(out, "torus-100k", "fine mesh", {"assets": [{"file": "torus-100k.glb"}], "light": TORUS_LIGHT,
-                                                 "material": "ggx:0.05", "camera": TORUS_CAMERA})
+    write_torus_shot(out, "torus-100k", "fine mesh", 320, 160, glb=True)
 
 
 def main():
@@ -410,8 +404,8 @@ def main():
         return
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "experiments", "scenes")
     os.makedirs(out, exist_ok=True)
-    write_torus_lowpoly(out)
-    write_torus_fine(out)
+    write_torus_shot(out, "torus-lowpoly", "low-poly mesh", 12, 6, glb=False)
+    write_torus_shot(out, "torus-fine", "fine mesh", 192, 96, glb=True)
     write_panel(out)
     write_cable(out)
     write_tk19_fig1(out)

@@ -177,11 +177,11 @@ Result<Scene> AssetScene(const std::filesystem::path& file) {
   s.material = *material;
   // An embedded normal texture is left out here (render --asset frames the
   // asset as it is); a scene file can give it as a file.
-  auto map = NormalMapOfMesh((*placed)->mesh.material, &mesh.normal_map_source);
-  if (map)
+  if (!(*placed)->mesh.material.normal_texture.encoded) {
+    auto map = NormalMapOfMesh((*placed)->mesh.material, &mesh.normal_map_source);
+    if (!map) return map.failure();
     mesh.normal_map = *map;
-  else if (!(*placed)->mesh.material.normal_texture.encoded)
-    return map.failure();
+  }
   s.primitives.push_back(mesh);
   s.light.type = shading::LightType::kDirectional;
   s.light.vec = glm::normalize(glm::dvec3(0.4, 0.8, 0.45));

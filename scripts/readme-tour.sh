@@ -56,6 +56,16 @@ step render-asset-reference.txt shimmer render --asset torus-lowpoly.gltf --mate
 step metrics-asset.txt shimmer metrics torus torus-ref --highlight-mask --highlight-threshold 0.1 --out torus-maps
 cp torus.png "$root/docs/images/asset-torus-lowpoly-none.png"
 cp torus-maps/tv_err.png "$root/docs/images/asset-torus-lowpoly-tv_err.png"
+# The README's glint strip (docs/glints.md): frame 0 of glint-plane under
+# orbit, the reference beside seed 001's model as published, its counted
+# form and Deliot and Belcour's anisotropic grids.
+glint=(--scene glint-plane --material glints:0.3,local=0.03,density=1e4 --camera orbit --frames 1 --size 128 128)
+PATH="$bin:$PATH" shimmer render "${glint[@]}" --reference-spp 8 --out glint-ref \
+  --preview "$root/docs/images/glints-reference.png" >/dev/null
+for v in glints-zk16 glints-zk16-counting glints-db23; do
+  PATH="$bin:$PATH" shimmer render "${glint[@]}" --variant "$v" --out "glint-$v" --preview "$root/docs/images/$v.png" \
+    >/dev/null
+done
 fi
 cd "$root"
 # The generated blocks of the README and of docs/*.md: a console transcript

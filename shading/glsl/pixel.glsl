@@ -68,15 +68,14 @@ vec3 lightIrradiance(Light light, vec3 p) {
   return light.radiance / max(dot(d, d), light.radius * light.radius);
 }
 
-// 0 where something lies between p and the light (a sphere light's centre),
-// else 1: a hard shadow, traced only by kernels of scenes whose light casts
+// 0 where something lies between p and the light (a sphere light's centre)
+// in direction l (lightDirection at p), else 1: a hard shadow, traced only by kernels of scenes whose light casts
 // shadows (SCENE_SHADOWS). The ray leaves from p moved off the surface along
 // the geometric normal, to the side the light is on, by a distance relative
 // to the scene's scale, so that the surface does not shadow itself; a
 // smooth-shaded low-poly mesh keeps its geometric terminator (its shading
 // normal may face a light its triangle faces away from).
-real lightVisibility(Light light, vec3 p, vec3 ng) {
-  vec3 l = lightDirection(light, p);
+real lightVisibility(Light light, vec3 p, vec3 ng, vec3 l) {
   real side = dot(ng, l) >= real(0) ? real(1) : real(-1);
   vec3 o = p + ng * (side * real(1e-4) * (real(1) + length(p)));
   real reach = light.type == LIGHT_SPHERE ? length(light.vec - o) : RAY_TMAX;
@@ -139,7 +138,7 @@ SurfaceSample surfaceWithNormal(Prim pr, int prim, vec3 p, vec3 eye, Light light
   s.v = safeNormalize(eye - p, s.n);
   s.l = lightDirection(light, p);
   s.irradiance = lightIrradiance(light, p);
-  if ((SCENE_FEATURES & SCENE_SHADOWS) != 0) s.irradiance = s.irradiance * lightVisibility(light, p, s.ng);
+  if ((SCENE_FEATURES & SCENE_SHADOWS) != 0) s.irradiance = s.irradiance * lightVisibility(light, p, s.ng, s.l);
   vec3 h = safeNormalize(s.v + s.l, s.n);
   real hz = guardedZ(dot(h, s.n));
   s.hpp = vec2(dot(h, s.tangent), dot(h, s.bitangent)) / hz;

@@ -225,8 +225,10 @@ void ParseReference(const json& j, Spec& s) {
   }
   if (r.contains("converge")) {
     const json& c = r["converge"];
-    if (!c.is_object()) throw SpecError{"converge", "must be {\"energy\": E, \"tv\": T}"};
-    RejectUnknownKeys(c, {"energy", "tv"}, "reference.converge");
+    if (!c.is_object()) throw SpecError{"converge", "must be {\"energy\": E, \"tv\": T, \"frame_stride\": K}"};
+    RejectUnknownKeys(c, {"energy", "tv", "frame_stride"}, "reference.converge");
+    if (c.contains("frame_stride"))
+      s.reference.converge.frame_stride = PositiveInt(c["frame_stride"], "converge.frame_stride", render::kMaxFrames);
     if (c.contains("energy")) s.reference.converge.energy = Number(c["energy"], "converge.energy");
     if (c.contains("tv")) s.reference.converge.tv = Number(c["tv"], "converge.tv");
     if (s.reference.converge.energy <= 0 || s.reference.converge.tv <= 0)

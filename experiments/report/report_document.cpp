@@ -45,7 +45,8 @@ std::string Bounds(double lo, double hi) {
 namespace {
 
 std::string CheckNumbers(const ShotCheck& c) {
-  return "spp " + std::to_string(c.spp) + " vs " + std::to_string(c.check_spp) + " per axis; changes: tv_ref " +
+  return "spp " + std::to_string(c.spp) + " vs " + std::to_string(c.check_spp) + " per axis" +
+         (c.frame_stride > 1 ? " on 1 in " + std::to_string(c.frame_stride) + " frames" : "") + "; changes: tv_ref " +
          Fmt(c.d_tv_ref, "%.3g") + " (tolerance " + Fmt(c.tol_tv, "%.3g") + "), energy_bias " +
          Fmt(c.d_energy_bias, "%.3g") + " (tolerance " + Fmt(c.tol_energy, "%.3g") + "), tv_err " +
          Fmt(c.d_tv_err, "%.3g") + " (tolerance " + Fmt(c.tol_tv, "%.3g") + ")" +

@@ -1,6 +1,7 @@
 // A shot's reference shown converged, not assumed (DESIGN.md, Trust): the
 // metrics of `none` against the reference must barely move when the
 // reference doubles its samples per axis.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -34,6 +35,27 @@ long long UnconvergedPixels(const fs::path& dir) {
   long long n = 0;
   for (const SequenceFrame& f : sequence->frames) n += f.unconverged_pixels.value_or(0);
   return n;
+}
+
+// The reference's frames 0, k, 2k, ... as a sequence of their own in `dir`
+// (a sequence.json naming the reference's files): nothing copied, nothing
+// rendered again.
+Status WriteFrameSubset(const fs::path& reference, int stride, const fs::path& dir) {
+  auto sequence = ReadSequenceFile(reference / "sequence.json");
+  if (!sequence) return sequence.failure();
+  SequenceFile subset = *sequence;
+  subset.frames.clear();
+  for (std::size_t i = 0; i < sequence->frames.size(); i += stride) {
+    SequenceFrame f = sequence->frames[i];
+    f.file = fs::absolute(reference / f.file).string();
+    subset.frames.push_back(f);
+  }
+  subset.frame_count = static_cast<int>(subset.frames.size());
+  if (subset.fps) subset.fps = *subset.fps / stride;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) return Status::Failure(dir.string() + ": cannot create the folder: " + ec.message(), ErrorCode::kIo);
+  return WriteSequenceFile(dir / "sequence.json", subset);
 }
 
 }  // namespace
@@ -84,7 +106,13 @@ Result<ShotCheck> CheckShot(const Job& shot_job, const RunOptions& options) {
   c.tolerance = job.reference.tolerance;
   // Twice the samples per axis; an adaptive reference goes one level finer
   // (half the tolerance: four times the samples where they are needed).
+  // The check's frames: the camera path at 1/k of its frame rate is its
+  // frames 0, k, 2k, ... (CameraAt depends on frame / fps alone).
+  const int stride = std::clamp(job.reference.converge.frame_stride, 1, job.frames);
+  c.frame_stride = stride;
   Job check = job;
+  check.frames = (job.frames + stride - 1) / stride;
+  check.fps = job.fps / stride;
   check.reference.spp = std::min(2 * job.reference.spp, render::kMaxReferenceSpp);
   check.reference.tolerance = job.reference.tolerance / 2;
   c.check_spp = check.reference.spp;
@@ -103,13 +131,17 @@ Result<ShotCheck> CheckShot(const Job& shot_job, const RunOptions& options) {
   auto reference_settings = ReferenceSettings(check, options);
   if (!reference_settings) return reference_settings.failure();
   if (auto r = RenderInto(*reference_settings, check_dir); !r) return Prefixed("check reference", r.failure());
-  auto none_settings = JobSettings(job, options);
+  auto none_settings = JobSettings(check, options);
   if (!none_settings) return none_settings.failure();
   if (auto r = RenderInto(*none_settings, none_dir); !r) return r.failure();
+  const fs::path subset_dir = work / ("subset-" + c.reference_id);
+  const fs::path ref_subset = stride > 1 ? subset_dir / "sequence.json" : ref_dir;
+  if (stride > 1)
+    if (Status s = WriteFrameSubset(ref_dir, stride, subset_dir); !s) return s.failure();
 
   // Both measured over the same pixels: the region of the shot's own
   // reference, as the jobs are measured.
-  auto at_n = MeasureAgainst(job, none_dir, ref_dir, {});
+  auto at_n = MeasureAgainst(job, none_dir, ref_subset, {});
   if (!at_n) return at_n.failure();
   const fs::path mask = check_dir / "region.png";
   cv::Mat region = at_n->region_mask * 255;
@@ -130,6 +162,7 @@ Result<ShotCheck> CheckShot(const Job& shot_job, const RunOptions& options) {
   JudgeConvergence(c);
   std::error_code ec;
   fs::remove_all(none_dir, ec);
+  if (stride > 1) fs::remove_all(subset_dir, ec);
   if (!options.keep_frames) fs::remove_all(check_dir, ec);
   return c;
 }

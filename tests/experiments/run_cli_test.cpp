@@ -372,6 +372,41 @@ TEST(RunCli, AStoreFromBeforePerKernelIdsRerunsOnceAndPrunes) {
   EXPECT_EQ(Rows(ws.dir / "r.db"), current);
 }
 
+// reference.converge.frame_stride: the check renders the camera path's
+// frames 0, k, 2k, ... only (its reference at twice the samples per axis is
+// the dear part) and measures `none` on those frames against both
+// references; every frame is the default.
+TEST(RunCli, TheConvergenceCheckMeasuresEveryKthFrameOfTheShot) {
+  Workspace ws;
+  std::string spec = ReadText(ws.dir / "tiny.json");
+  spec.replace(spec.find(R"("reference": {"spp": 2})"), 23, R"("reference": {"spp": 2, "converge": {"frame_stride": 2}})");
+  std::ofstream(ws.dir / "tiny.json") << spec;
+  ASSERT_EQ(std::system(ws.Run("--db r.db --work w --no-benchmark --keep-frames").c_str()), 0)
+      << ReadText(ws.dir / "log.txt");
+  auto store = ResultStore::Open((ws.dir / "r.db").string(), ResultStore::Mode::kReadOnly);
+  ASSERT_TRUE(store) << store.error();
+  auto shots = (*store)->Shots();
+  ASSERT_TRUE(shots) << shots.error();
+  ASSERT_EQ(shots->size(), 2u);
+  for (const ShotCheck& shot : *shots) {
+    EXPECT_EQ(shot.frame_stride, 2);
+    EXPECT_EQ(shot.check_spp, 4);
+    // The check's reference: frames 0, 2 and 4 of the 5, at 30 fps.
+    auto sequence = ReadSequenceFile(ws.dir / "w" / ("check-" + shot.reference_id) / "sequence.json");
+    ASSERT_TRUE(sequence) << sequence.error();
+    ASSERT_EQ(sequence->frames.size(), 3u);
+    EXPECT_DOUBLE_EQ(*sequence->fps, 15.0);
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(sequence->frames[i].time_s, 2 * i / 30.0, 1e-12) << i;
+    EXPECT_TRUE(fs::exists(ws.dir / "w" / ("check-" + shot.reference_id) / "frame_0002.exr"));
+    EXPECT_FALSE(fs::exists(ws.dir / "w" / ("check-" + shot.reference_id) / "frame_0003.exr"));
+    EXPECT_EQ(shot.converged, shot.d_energy_bias <= 0.02 && shot.d_tv_ref <= 0.1 && shot.d_tv_err <= 0.1);
+  }
+  // The report says which frames were checked.
+  const std::string report = "cd " + ws.dir.string() + " && " + SHIMMER_EXE + " report r.db -o rep >>report.txt 2>&1";
+  ASSERT_EQ(std::system(report.c_str()), 0);
+  EXPECT_NE(ReadText(ws.dir / "rep" / "report.md").find("spp 2 vs 4 per axis on 1 in 2 frames"), std::string::npos);
+}
+
 TEST(RunCli, AShotOutsideTheConvergenceToleranceIsMarkedUnconverged) {
   Workspace ws;
   std::string spec = ReadText(ws.dir / "tiny.json");

@@ -387,13 +387,14 @@ std::string TrustSpec(const std::string& tail) {
 
 TEST(Spec, ReferenceReplicatesConvergenceAndBenchmarkParse) {
   auto r = ParseSpec(TrustSpec(R"(,
-  "reference": {"spp": 6, "replicates": 8, "converge": {"energy": 0.01, "tv": 0.2}},
+  "reference": {"spp": 6, "replicates": 8, "converge": {"energy": 0.01, "tv": 0.2, "frame_stride": 4}},
   "benchmark": {"size": [256, 128], "repetitions": 3, "precision": 0.05, "max_repetitions": 30})"),
                      "v.json");
   ASSERT_TRUE(r) << r.error();
   EXPECT_EQ(r->reference.replicates, 8);
   EXPECT_DOUBLE_EQ(r->reference.converge.energy, 0.01);
   EXPECT_DOUBLE_EQ(r->reference.converge.tv, 0.2);
+  EXPECT_EQ(r->reference.converge.frame_stride, 4);
   EXPECT_TRUE(r->benchmark.enabled);
   EXPECT_EQ(r->benchmark.width, 256);
   EXPECT_EQ(r->benchmark.height, 128);
@@ -407,6 +408,7 @@ TEST(Spec, ReferenceReplicatesConvergenceAndBenchmarkParse) {
   EXPECT_EQ(d->reference.replicates, 4);
   EXPECT_DOUBLE_EQ(d->reference.converge.energy, 0.02);
   EXPECT_DOUBLE_EQ(d->reference.converge.tv, 0.10);
+  EXPECT_EQ(d->reference.converge.frame_stride, 1);
   EXPECT_EQ(d->benchmark.width, 512);
   EXPECT_EQ(d->benchmark.repetitions, 5);
   EXPECT_DOUBLE_EQ(d->benchmark.precision, 0.03);
@@ -423,13 +425,16 @@ TEST(Spec, ReferenceReplicatesConvergenceAndBenchmarkParse) {
   EXPECT_NE(JobId(b), JobId(c));
   Job e = b;
   e.reference.converge.tv = 0.5;
+  e.reference.converge.frame_stride = 3;
   EXPECT_EQ(JobId(b), JobId(e));
+  EXPECT_EQ(ReferenceId(b), ReferenceId(e));
   EXPECT_EQ(Job::FromJson(a.ToJson()).reference.replicates, 8);
 
   for (const auto& [tail, expected] : std::vector<std::pair<std::string, std::string>>{
            {R"(, "reference": {"replicates": 1})", "replicates: must be at least 2"},
            {R"(, "reference": {"converge": {"energy": 0}})", "converge: tolerances must be > 0"},
            {R"(, "reference": {"converge": {"enrgy": 0.1}})", "enrgy: unknown key"},
+           {R"(, "reference": {"converge": {"frame_stride": 0}})", "converge.frame_stride: must be an integer"},
            {R"(, "benchmark": {"size": [511, 512]})", "benchmark.size: width and height must be even"},
            {R"(, "benchmark": {"repetitions": 0})", "benchmark.repetitions: must be an integer"},
            {R"(, "benchmark": 3)", "benchmark: must be true, false or"},

@@ -30,6 +30,7 @@ struct ShotCheck {
   std::string reference_id;
   std::string scene, material, camera;
   int spp = 0, check_spp = 0;                 // N and 2N per axis (per replicate)
+  int frame_stride = 1;                       // measured on frames 0, k, 2k, ... (rows from before: every frame)
   double tolerance = 0, check_tolerance = 0;  // adaptive references
   // Metrics of `none` against the reference at N (as the jobs are measured) and at 2N.
   double tv_ref = 0, tv_ref_check = 0;
@@ -86,7 +87,7 @@ struct BenchmarkCost {
 // measured them (runner/shot_check.cpp).
 void JudgeConvergence(ShotCheck& check);
 
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotCheck, reference_id, scene, material, camera, spp, check_spp,
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotCheck, reference_id, scene, material, camera, spp, check_spp, frame_stride,
                                                 tolerance, check_tolerance, tv_ref, tv_ref_check, energy_bias,
                                                 energy_bias_check, tv_err, tv_err_check, tv_err_noise,
                                                 tv_err_noise_check, d_tv_ref, d_energy_bias, d_tv_err, tol_energy,

@@ -130,6 +130,70 @@ json ToJson(const SequenceFile& s) {
   return j;
 }
 
+namespace {
+
+Status ReadCamera(const json& cj, const std::string& source, SequenceCamera* camera) {
+  if (!cj.is_object()) return Status::Failure(source + ": \"camera\" must be an object");
+  FieldReader cr(cj, source + ": camera");
+  cr.Read("path", &camera->path);
+  cr.Read("distance", &camera->distance);
+  cr.Read("elevation_deg", &camera->elevation_deg);
+  cr.Read("azimuth_deg", &camera->azimuth_deg);
+  cr.Read("fov_y_deg", &camera->fov_y_deg);
+  if (!cr.error().empty()) return Status::Failure(cr.error());
+  if (cj.contains("target")) {
+    const json& t = cj["target"];
+    if (!t.is_array() || t.size() != 3 || !t[0].is_number() || !t[1].is_number() || !t[2].is_number())
+      return Status::Failure(source + ": camera: \"target\" must be [x, y, z]");
+    for (int i = 0; i < 3; ++i) camera->target[i] = t[i].get<double>();
+  }
+  return Ok();
+}
+
+Status ReadTimings(const json& tj, const std::string& source, SequenceTimings* t) {
+  if (!tj.is_object()) return Status::Failure(source + ": \"timings_ms\" must be an object");
+  FieldReader tr(tj, source + ": timings_ms");
+  tr.Read("shader_compile", &t->shader_compile_ms);
+  tr.Read("specialize", &t->specialize_ms);
+  tr.Read("pipeline_create", &t->pipeline_create_ms);
+  tr.Read("startup", &t->startup_ms);
+  tr.Read("first_dispatch_jit", &t->first_dispatch_jit_ms);
+  tr.Read("render_wall", &t->render_wall_ms);
+  tr.Read("readback", &t->readback_ms);
+  tr.Read("exr_write", &t->exr_write_ms);
+  if (!tr.error().empty()) return Status::Failure(tr.error());
+  return Ok();
+}
+
+// File names, or objects with a "file" (shimmer's renderer adds gpu_ms and time_s).
+Status ReadFrames(const json& frames, const std::string& source, std::vector<SequenceFrame>* out) {
+  const std::string shape = ": \"frames\" must be an array of file names or of {\"file\": name} objects";
+  if (!frames.is_array()) return Status::Failure(source + shape);
+  for (const json& f : frames) {
+    SequenceFrame frame;
+    if (f.is_string()) {
+      frame.file = f.get<std::string>();
+    } else if (f.is_object() && f.contains("file") && f["file"].is_string()) {
+      FieldReader fr(f, source + ": frames[" + std::to_string(out->size()) + "]");
+      fr.Read("file", &frame.file);
+      fr.Read("gpu_ms", &frame.gpu_ms);
+      fr.Read("time_s", &frame.time_s);
+      fr.Read("mean_spp", &frame.mean_spp);
+      fr.Read("rounds", &frame.rounds);
+      fr.Read("unconverged_pixels", &frame.unconverged_pixels);
+      if (!fr.error().empty()) return Status::Failure(fr.error());
+    } else {
+      return Status::Failure(source + shape);
+    }
+    if (frame.file.empty() || frame.file.find('\0') != std::string::npos)
+      return Status::Failure(source + ": frames[" + std::to_string(out->size()) + "]: empty file name");
+    out->push_back(std::move(frame));
+  }
+  return Ok();
+}
+
+}  // namespace
+
 Result<SequenceFile> SequenceFromJson(const json& j, const std::string& source) {
   using R = Result<SequenceFile>;
   if (!j.is_object()) return R::Failure(source + ": expected a JSON object");
@@ -173,23 +237,8 @@ Result<SequenceFile> SequenceFromJson(const json& j, const std::string& source) 
   if (!r.error().empty()) return R::Failure(r.error());
   if (s.fps && !(*s.fps > 0)) return R::Failure(source + ": \"fps\" must be > 0");
 
-  if (j.contains("camera")) {
-    const json& cj = j["camera"];
-    if (!cj.is_object()) return R::Failure(source + ": \"camera\" must be an object");
-    FieldReader cr(cj, source + ": camera");
-    cr.Read("path", &s.camera.path);
-    cr.Read("distance", &s.camera.distance);
-    cr.Read("elevation_deg", &s.camera.elevation_deg);
-    cr.Read("azimuth_deg", &s.camera.azimuth_deg);
-    cr.Read("fov_y_deg", &s.camera.fov_y_deg);
-    if (!cr.error().empty()) return R::Failure(cr.error());
-    if (cj.contains("target")) {
-      const json& t = cj["target"];
-      if (!t.is_array() || t.size() != 3 || !t[0].is_number() || !t[1].is_number() || !t[2].is_number())
-        return R::Failure(source + ": camera: \"target\" must be [x, y, z]");
-      for (int i = 0; i < 3; ++i) s.camera.target[i] = t[i].get<double>();
-    }
-  }
+  if (j.contains("camera"))
+    if (Status c = ReadCamera(j["camera"], source, &s.camera); !c) return c.failure();
   if (j.contains("params")) {
     const json& pj = j["params"];
     if (!pj.is_object()) return R::Failure(source + ": \"params\" must be an object of numbers");
@@ -198,45 +247,10 @@ Result<SequenceFile> SequenceFromJson(const json& j, const std::string& source) 
       s.params[k] = v.get<double>();
     }
   }
-  if (j.contains("timings_ms")) {
-    const json& tj = j["timings_ms"];
-    if (!tj.is_object()) return R::Failure(source + ": \"timings_ms\" must be an object");
-    FieldReader tr(tj, source + ": timings_ms");
-    tr.Read("shader_compile", &s.timings.shader_compile_ms);
-    tr.Read("specialize", &s.timings.specialize_ms);
-    tr.Read("pipeline_create", &s.timings.pipeline_create_ms);
-    tr.Read("startup", &s.timings.startup_ms);
-    tr.Read("first_dispatch_jit", &s.timings.first_dispatch_jit_ms);
-    tr.Read("render_wall", &s.timings.render_wall_ms);
-    tr.Read("readback", &s.timings.readback_ms);
-    tr.Read("exr_write", &s.timings.exr_write_ms);
-    if (!tr.error().empty()) return R::Failure(tr.error());
-  }
-  if (j.contains("frames")) {
-    // File names, or objects with a "file" (shimmer's renderer adds gpu_ms and time_s).
-    const std::string shape = ": \"frames\" must be an array of file names or of {\"file\": name} objects";
-    if (!j["frames"].is_array()) return R::Failure(source + shape);
-    for (const json& f : j["frames"]) {
-      SequenceFrame frame;
-      if (f.is_string()) {
-        frame.file = f.get<std::string>();
-      } else if (f.is_object() && f.contains("file") && f["file"].is_string()) {
-        FieldReader fr(f, source + ": frames[" + std::to_string(s.frames.size()) + "]");
-        fr.Read("file", &frame.file);
-        fr.Read("gpu_ms", &frame.gpu_ms);
-        fr.Read("time_s", &frame.time_s);
-        fr.Read("mean_spp", &frame.mean_spp);
-        fr.Read("rounds", &frame.rounds);
-        fr.Read("unconverged_pixels", &frame.unconverged_pixels);
-        if (!fr.error().empty()) return R::Failure(fr.error());
-      } else {
-        return R::Failure(source + shape);
-      }
-      if (frame.file.empty() || frame.file.find('\0') != std::string::npos)
-        return R::Failure(source + ": frames[" + std::to_string(s.frames.size()) + "]: empty file name");
-      s.frames.push_back(std::move(frame));
-    }
-  }
+  if (j.contains("timings_ms"))
+    if (Status t = ReadTimings(j["timings_ms"], source, &s.timings); !t) return t.failure();
+  if (j.contains("frames"))
+    if (Status f = ReadFrames(j["frames"], source, &s.frames); !f) return f.failure();
   return s;
 }
 

@@ -21,6 +21,8 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "runner_parts.h"
 #include "shimmer/experiments/runner.h"
@@ -208,6 +210,74 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
   }
   if (costs.empty()) return R::Failure("benchmark: an empty batch");
   return costs;
+}
+
+namespace {
+
+// The name of the device the benchmarks run on, as the store records it.
+std::string BenchmarkDevice(const RunOptions& options) {
+  auto devices = render::ListDevices();
+  if (devices)
+    for (const auto& d : *devices)
+      if (d.name.find(options.device) != std::string::npos) return d.name;
+  return "";
+}
+
+// The members of the batch to time (indices; `none`, 0, first): all of
+// them when any lacks a cost timed on this device with the kernels it runs
+// now (a kernel change moves costs as it moves ids); else `none` and the
+// variants whose cost's interval is wider than the precision after fewer
+// repetitions than the cap (a raised cap times them again); else none.
+std::vector<std::size_t> BenchmarkMembersToTime(const BenchmarkBatch& batch, const BenchmarkOptions& bench,
+                                                const std::string& device, const std::vector<BenchmarkCost>& existing) {
+  std::vector<std::size_t> imprecise;
+  for (std::size_t k = 0; k < batch.jobs.size(); ++k) {
+    const Job& job = batch.jobs[k];
+    const std::string kernels = BenchmarkKernels(batch, k);
+    const auto cost = std::find_if(existing.begin(), existing.end(), [&](const BenchmarkCost& c) {
+      return c.scene == batch.scene && c.derivatives == batch.derivatives && c.variant == job.variant &&
+             c.params == job.params && c.width == bench.width && c.height == bench.height && c.device == device &&
+             c.core == kernels;
+    });
+    if (cost == existing.end()) {
+      std::vector<std::size_t> all(batch.jobs.size());
+      for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+      return all;
+    }
+    const RatioEstimate ratio{cost->ratio_to_none, cost->ratio_lo, cost->ratio_hi, cost->repetitions};
+    if (k > 0 && !ratio.Within(bench.precision) && cost->repetitions < bench.max_repetitions) imprecise.push_back(k);
+  }
+  if (!imprecise.empty()) imprecise.insert(imprecise.begin(), 0);
+  return imprecise;
+}
+
+}  // namespace
+
+// Times this shard's batches (dealt by index, so each is timed once, whole)
+// that the store lacks.
+Status RunBenchmarks(const std::vector<Job>& all_jobs, const BenchmarkOptions& bench, const RunOptions& options,
+                     ResultStore& store, RunProgress* progress, RunSummary* summary,
+                     std::chrono::steady_clock::time_point start) {
+  auto existing = store.Benchmarks();
+  if (!existing) return existing.failure();
+  const std::string device = BenchmarkDevice(options);
+  const std::vector<BenchmarkBatch> batches = BenchmarkBatches(all_jobs);
+  for (std::size_t b = options.shard_index; b < batches.size(); b += options.shard_count) {
+    const std::vector<std::size_t> members = BenchmarkMembersToTime(batches[b], bench, device, *existing);
+    if (members.empty()) continue;
+    BenchmarkBatch batch{batches[b].scene, batches[b].derivatives, {}};
+    for (std::size_t k : members) batch.jobs.push_back(batches[b].jobs[k]);
+    progress->current = "benchmark " + batch.scene + " " + batch.derivatives + " (" +
+                        std::to_string(batch.jobs.size()) + " variants at " + std::to_string(bench.width) + "x" +
+                        std::to_string(bench.height) + ")";
+    progress->elapsed_s = SecondsSince(start);
+    if (options.progress) options.progress(*progress);
+    auto costs = RunBenchmark(batch, bench, options);
+    if (!costs) return costs.failure();
+    if (Status s = store.InsertBenchmarks(*costs); !s) return s;
+    ++summary->benchmarks;
+  }
+  return Ok();
 }
 
 }  // namespace shimmer::experiments

@@ -2,11 +2,14 @@
 // reference's convergence; benchmark.cpp: timing renders).
 #pragma once
 
+#include <chrono>
 #include <filesystem>
+#include <vector>
 
 #include "shimmer/core/result.h"
 #include "shimmer/core/sequence_file.h"
 #include "shimmer/experiments/job.h"
+#include "shimmer/experiments/result_store.h"
 #include "shimmer/experiments/runner.h"
 #include "shimmer/metrics/metrics_report.h"
 #include "shimmer/renderer/renderer.h"
@@ -33,5 +36,15 @@ Result<metrics::MetricsReport> MeasureAgainst(const Job& job, const std::filesys
 // of the batch's `none` (the ratio's denominator). A cost of other kernels
 // is timed again; a comment edit in a shader times nothing again.
 std::string BenchmarkKernels(const BenchmarkBatch& batch, std::size_t k);
+
+double SecondsSince(std::chrono::steady_clock::time_point start);
+// One check per shot (reference id) that the store lacks (shot_check.cpp),
+// on `options.jobs` workers; shots are dealt to shards by index.
+Status CheckShots(const std::vector<Job>& all_jobs, const RunOptions& options, ResultStore& store,
+                  RunProgress* progress, RunSummary* summary, std::chrono::steady_clock::time_point start);
+// Times this shard's benchmark batches that the store lacks (benchmark.cpp).
+Status RunBenchmarks(const std::vector<Job>& all_jobs, const BenchmarkOptions& bench, const RunOptions& options,
+                     ResultStore& store, RunProgress* progress, RunSummary* summary,
+                     std::chrono::steady_clock::time_point start);
 
 }  // namespace shimmer::experiments

@@ -1,10 +1,17 @@
 // A shot's reference shown converged, not assumed (DESIGN.md, Trust): the
 // metrics of `none` against the reference must barely move when the
-// reference doubles its samples per axis.
+// reference doubles its samples per axis. Here the check of one shot and the
+// run's pass over the shots the store lacks.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <thread>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -18,6 +25,9 @@ namespace shimmer::experiments {
 namespace fs = std::filesystem;
 
 namespace {
+
+// The seed of the check's reference (any but the shot reference's 0).
+constexpr std::uint32_t kCheckSeed = 0x2c4ec5u;
 
 // tv_err below this share of tv_ref counts as no flicker (see CheckShot).
 constexpr double kNegligibleTvErr = 1e-3;
@@ -126,15 +136,22 @@ Result<ShotCheck> CheckShot(const Job& shot_job, const RunOptions& options) {
 
   const fs::path work(options.work_dir);
   const fs::path ref_dir = ReferenceDirectory(job, options);
-  const fs::path check_dir = work / ("check-" + c.reference_id);
-  const fs::path none_dir = work / ("none-" + c.reference_id);
+  // Named by the frames they hold: kept frames (--keep-frames) of a check
+  // on other frames are not taken for these.
+  const std::string tag = (stride > 1 ? "every" + std::to_string(stride) + "-" : "") + c.reference_id;
+  const fs::path check_dir = work / ("check-" + tag);
+  const fs::path none_dir = work / ("none-" + tag);
   auto reference_settings = ReferenceSettings(check, options);
   if (!reference_settings) return reference_settings.failure();
+  // An independent estimate: with the reference's own seed, sample k of a
+  // pixel takes the same jitter at N and 2N, and the two errors partly
+  // cancel in the comparison.
+  reference_settings->seed = kCheckSeed;
   if (auto r = RenderInto(*reference_settings, check_dir); !r) return Prefixed("check reference", r.failure());
   auto none_settings = JobSettings(check, options);
   if (!none_settings) return none_settings.failure();
   if (auto r = RenderInto(*none_settings, none_dir); !r) return r.failure();
-  const fs::path subset_dir = work / ("subset-" + c.reference_id);
+  const fs::path subset_dir = work / ("subset-" + tag);
   const fs::path ref_subset = stride > 1 ? subset_dir / "sequence.json" : ref_dir;
   if (stride > 1)
     if (Status s = WriteFrameSubset(ref_dir, stride, subset_dir); !s) return s.failure();
@@ -165,6 +182,57 @@ Result<ShotCheck> CheckShot(const Job& shot_job, const RunOptions& options) {
   if (stride > 1) fs::remove_all(subset_dir, ec);
   if (!options.keep_frames) fs::remove_all(check_dir, ec);
   return c;
+}
+
+// One check per shot (reference id) that the store lacks, on `options.jobs`
+// workers. Shots are dealt to shards by index, as benchmark batches are, so
+// a sharded run checks each shot once, not once per shard.
+Status CheckShots(const std::vector<Job>& all_jobs, const RunOptions& options, ResultStore& store,
+                  RunProgress* progress, RunSummary* summary, std::chrono::steady_clock::time_point start) {
+  std::vector<Job> shots;
+  std::set<std::string> seen;
+  int index = 0;
+  for (const Job& job : all_jobs) {
+    if (job.external) continue;  // its reference is the user's, rendered by no one here
+    if (!seen.insert(ReferenceId(job)).second) continue;
+    if (index++ % options.shard_count != options.shard_index) continue;
+    auto has = store.HasShot(ReferenceId(job));
+    if (!has) return has.failure();
+    if (!*has) shots.push_back(job);
+  }
+  std::mutex mutex;
+  std::atomic<std::size_t> next{0};
+  std::optional<Error> error;
+  auto worker = [&] {
+    for (std::size_t k = next++; k < shots.size(); k = next++) {
+      const Job& job = shots[k];
+      const std::string what = job.scene + " " + job.material + " " + job.camera;
+      auto check = CheckShot(job, options);
+      std::lock_guard<std::mutex> lock(mutex);
+      if (error) return;
+      if (!check) {
+        error = Prefixed("reference check of " + what, check.failure());
+        return;
+      }
+      if (Status s = store.InsertShot(*check); !s) {
+        error = s.failure();
+        return;
+      }
+      ++summary->shots_checked;
+      if (!check->converged) ++summary->shots_unconverged;
+      progress->current = "reference check " + std::to_string(summary->shots_checked) + "/" +
+                          std::to_string(shots.size()) + ": " + what + (check->converged ? "" : " (unconverged)");
+      progress->elapsed_s = SecondsSince(start);
+      progress->eta_s = 0;
+      if (options.progress) options.progress(*progress);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int i = 1; i < std::max(1, options.jobs); ++i) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
+  if (error) return Status(*error);
+  return Ok();
 }
 
 }  // namespace shimmer::experiments

@@ -8,6 +8,7 @@
 #include <map>
 #include <mutex>
 
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "shimmer/core/content_hash.h"
@@ -106,18 +107,64 @@ Result<std::shared_ptr<const PlacedMesh>> PlaceAsset(const std::filesystem::path
   return cache.placed.emplace(key, std::move(placed)).first->second;
 }
 
+namespace {
+
+// Textures the kernel reads texel by texel are kept within this side.
+constexpr int kMaxRoughnessSide = 4096;
+
+// The roughness texture's roughness channel in [0, 1], as doubles.
+Result<cv::Mat> RoughnessChannel(const MeshTexture& t) {
+  cv::Mat image = t.encoded ? cv::imdecode(*t.encoded, cv::IMREAD_UNCHANGED) : cv::imread(t.file.string(), cv::IMREAD_UNCHANGED);
+  const std::string name = t.encoded ? "the embedded image " + std::to_string(t.image) : t.file.string();
+  if (image.empty()) return Result<cv::Mat>::Failure(name + ": the roughness texture cannot be read (PNG or JPEG expected)");
+  const double full = image.depth() == CV_16U ? 65535.0 : image.depth() == CV_8U ? 255.0 : 0.0;
+  if (full == 0) return Result<cv::Mat>::Failure(name + ": the roughness texture is not 8 or 16 bits per channel");
+  if (image.cols > kMaxRoughnessSide || image.rows > kMaxRoughnessSide)
+    return Result<cv::Mat>::Failure(name + ": the roughness texture is " + std::to_string(image.cols) + "x" +
+                                    std::to_string(image.rows) + "; at most " + std::to_string(kMaxRoughnessSide) +
+                                    " texels a side are read");
+  // OpenCV orders colour channels B, G, R(, A): glTF's G is channel 1; a grey image has one.
+  cv::Mat g;
+  cv::extractChannel(image, g, image.channels() >= 3 ? 1 : 0);
+  g.convertTo(g, CV_64F, 1.0 / full);
+  return g;
+}
+
+}  // namespace
+
+std::size_t PackedRoughnessWords(const RoughnessMap& map) {
+  return 1 + (map.alpha_factor.size() + 3) / 4;
+}
+
+Result<std::shared_ptr<const RoughnessMap>> RoughnessMapOfMesh(const MeshMaterial& m) {
+  const MeshTexture& t = m.metallic_roughness_texture;
+  if (!t.present()) return std::shared_ptr<const RoughnessMap>();
+  auto g = RoughnessChannel(t);
+  if (!g) return g.failure();
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(*g, &lo, &hi);
+  const double mean = cv::mean(*g)[0];
+  // Uniform: the material's alpha is the whole story. All black: alpha is
+  // clamped to its floor everywhere (MaterialOfMesh), a ratio has no meaning.
+  if (lo == hi || mean <= 0) return std::shared_ptr<const RoughnessMap>();
+  auto map = std::make_shared<RoughnessMap>();
+  map->width = g->cols;
+  map->height = g->rows;
+  map->alpha_factor.reserve(std::size_t(g->total()));
+  for (int y = 0; y < g->rows; ++y)
+    for (int x = 0; x < g->cols; ++x) {
+      const double r = g->at<double>(y, x) / mean;
+      map->alpha_factor.push_back(static_cast<float>(r * r));
+    }
+  return std::shared_ptr<const RoughnessMap>(std::move(map));
+}
+
 Result<shading::MaterialDesc> MaterialOfMesh(const MeshMaterial& m) {
-  using R = Result<shading::MaterialDesc>;
   double roughness = m.roughness;
   if (const MeshTexture& t = m.metallic_roughness_texture; t.present()) {
-    cv::Mat image = t.encoded ? cv::imdecode(*t.encoded, cv::IMREAD_UNCHANGED) : cv::imread(t.file.string(), cv::IMREAD_UNCHANGED);
-    const std::string name = t.encoded ? "the embedded image " + std::to_string(t.image) : t.file.string();
-    if (image.empty()) return R::Failure(name + ": the roughness texture cannot be read (PNG or JPEG expected)");
-    const double full = image.depth() == CV_16U ? 65535.0 : image.depth() == CV_8U ? 255.0 : 0.0;
-    if (full == 0) return R::Failure(name + ": the roughness texture is not 8 or 16 bits per channel");
-    // OpenCV orders colour channels B, G, R(, A): glTF's G is channel 1; a grey image has one.
-    const cv::Scalar mean = cv::mean(image);
-    roughness *= (image.channels() >= 3 ? mean[1] : mean[0]) / full;
+    auto g = RoughnessChannel(t);
+    if (!g) return g.failure();
+    roughness *= cv::mean(*g)[0];
   }
   shading::MaterialDesc d;
   d.ndf = shading::Ndf::kGgx;
@@ -182,6 +229,9 @@ Result<Scene> AssetScene(const std::filesystem::path& file) {
     if (!map) return map.failure();
     mesh.normal_map = *map;
   }
+  auto roughness = RoughnessMapOfMesh((*placed)->mesh.material);
+  if (!roughness) return roughness.failure();
+  mesh.roughness_map = *roughness;
   s.primitives.push_back(mesh);
   s.light.type = shading::LightType::kDirectional;
   s.light.vec = glm::normalize(glm::dvec3(0.4, 0.8, 0.45));

@@ -252,6 +252,9 @@ Status ReadAssets(const nlohmann::json& j, const std::string& source, Scene& s) 
       if (!own) return Status::Failure(source + ": " + pointer + "/file: " + own.error());
       p.normal_map = *own;
     }
+    auto roughness = RoughnessMapOfMesh(p.mesh->mesh.material);
+    if (!roughness) return Status::Failure(source + ": " + pointer + "/file: " + roughness.error());
+    p.roughness_map = *roughness;
     // Neither the scene nor an entry before gives the material: the first
     // asset's own.
     if (material.empty() && material_at.empty() && index == 1) {
@@ -265,12 +268,136 @@ Status ReadAssets(const nlohmann::json& j, const std::string& source, Scene& s) 
       s.material = *m;
       material_at = pointer + "/material";
     }
-    mesh_words += PackedMeshWords(*p.mesh);
+    mesh_words += PackedMeshWords(*p.mesh) + (p.roughness_map ? PackedRoughnessWords(*p.roughness_map) : 0);
     if (mesh_words >= kMaxSceneWords)
       return Status::Failure(source + ": /assets: the assets up to " + pointer +
                              " take more than the kernel's 2^24 scene words; use smaller assets");
     s.primitives.push_back(p);
   }
+  return Ok();
+}
+
+}  // namespace
+
+namespace {
+
+// The analytic primitive at `pointer` ("/primitives/3").
+Result<Primitive> PrimitiveFromJson(const nlohmann::json& pj, const std::string& source, const std::string& pointer) {
+  using R = Result<Primitive>;
+  if (!pj.is_object()) return R::Failure(source + ": " + pointer + ": must be an object with a 'type'");
+  FieldReader r(pj, source, pointer);
+  std::string type;
+  r.Require("type").String("type", &type);
+  if (!r.ok()) return R::Failure(r.error());
+  Primitive p;
+  if (type == "sphere") {
+    p.type = Primitive::Type::kSphere;
+    r.Keys({"type", "center", "radius", "normal_map"}).Require("center");
+    r.Vec3("center", &p.a).Number("radius", &p.radius, 0, kMaxCoordinate, true);
+  } else if (type == "capsule") {
+    p.type = Primitive::Type::kCapsule;
+    p.radius = 0.02;
+    r.Keys({"type", "a", "b", "radius", "normal_map"}).Require("a").Require("b");
+    r.Vec3("a", &p.a).Vec3("b", &p.b).Number("radius", &p.radius, 0, kMaxCoordinate, true);
+    if (r.ok() && glm::length(p.b - p.a) < 1e-9) r.FailKey("b", "coincides with 'a': a capsule needs two ends");
+  } else if (type == "plane") {
+    p.type = Primitive::Type::kPlane;
+    p.radius = 0;
+    r.Keys({"type", "height", "bump_slope", "bump_frequency", "normal_map"});
+    r.Number("height", &p.radius, -kMaxCoordinate, kMaxCoordinate)
+        .Number("bump_slope", &p.bump_slope, 0, 10)
+        .Number("bump_frequency", &p.bump_frequency, 0, 1e4);
+    if (r.ok() && p.bump_slope > 0 && p.bump_frequency <= 0)
+      r.FailKey("bump_frequency", "must be > 0 when 'bump_slope' is");
+  } else {
+    r.FailKey("type", "unknown type '" + type + "' (sphere, capsule, plane)");
+  }
+  ReadNormalMap(r, pj, source, pointer, &p);
+  if (!r.ok()) return R::Failure(r.error());
+  return p;
+}
+
+// The kernel reads every normal map's mip chain from the scene words: their
+// texels, each map once however many primitives share it, are bounded.
+Status CheckNormalMapWords(const std::vector<Primitive>& primitives, const std::string& source) {
+  std::vector<const NormalMap*> maps;
+  std::size_t map_words = 0;
+  for (const Primitive& p : primitives)
+    if (p.normal_map && std::find(maps.begin(), maps.end(), p.normal_map.get()) == maps.end()) {
+      maps.push_back(p.normal_map.get());
+      for (const NormalMapLevel& level : p.normal_map->levels) map_words += 3 * level.texels.size();
+    }
+  if (map_words > kMaxNormalMapWords)
+    return Status::Failure(source + ": /primitives: the normal maps' mip chains take " + std::to_string(map_words / 3) +
+                           " texels; at most " + std::to_string(kMaxNormalMapWords / 3) +
+                           " fit (about one 2048 x 2048 map; use smaller maps)");
+  return Ok();
+}
+
+// "/light": directional (the default), sphere or sg.
+Status ReadLight(const nlohmann::json& lj, const std::string& source, shading::LightDesc* light) {
+  if (!lj.is_object()) return Status::Failure(source + ": /light: must be an object");
+  std::string type = "directional";
+  FieldReader r(lj, source, "/light");
+  r.String("type", &type);
+  if (r.ok() && type == "directional") {
+    glm::dvec3 dir{0, 1, 0}, rad{1, 1, 1};
+    r.Keys({"type", "direction", "irradiance", "shadows"})
+        .Vec3("direction", &dir)
+        .Vec3("irradiance", &rad)
+        .Bool("shadows", &light->shadows);
+    if (r.ok() && glm::length(dir) < 1e-9) r.FailKey("direction", "must not be zero");
+    if (r.ok() && glm::any(glm::lessThan(rad, glm::dvec3(0)))) r.FailKey("irradiance", "must be >= 0");
+    light->type = shading::LightType::kDirectional;
+    if (r.ok()) light->vec = glm::normalize(dir);
+    light->radiance = rad;
+  } else if (r.ok() && type == "sphere") {
+    light->type = shading::LightType::kSphere;
+    light->radius = 0.05;
+    r.Keys({"type", "center", "intensity", "radius", "shadows"})
+        .Vec3("center", &light->vec)
+        .Vec3("intensity", &light->radiance)
+        .Number("radius", &light->radius, 1e-6, kMaxCoordinate)
+        .Bool("shadows", &light->shadows);
+    if (r.ok() && glm::any(glm::lessThan(light->radiance, glm::dvec3(0)))) r.FailKey("intensity", "must be >= 0");
+  } else if (r.ok() && type == "sg") {
+    // A distant spherical Gaussian (seed 004): amplitude e^(sharpness (axis.l - 1)).
+    glm::dvec3 axis{0, 1, 0}, amplitude{1, 1, 1};
+    double sharpness = 0;
+    if (lj.contains("shadows"))
+      r.FailKey("shadows", "an SG light is a distant lobe over the whole sky and casts no hard shadow; "
+                           "use a directional or sphere light");
+    r.Keys({"type", "axis", "sharpness", "amplitude"})
+        .Require("axis")
+        .Require("sharpness")
+        .Require("amplitude")
+        .Vec3("axis", &axis)
+        .Number("sharpness", &sharpness, 0, kMaxSgSharpness)
+        .Vec3("amplitude", &amplitude);
+    if (r.ok() && glm::length(axis) < 1e-9) r.FailKey("axis", "must not be zero");
+    if (r.ok() && glm::any(glm::lessThan(amplitude, glm::dvec3(0)))) r.FailKey("amplitude", "must be >= 0");
+    light->type = shading::LightType::kSg;
+    if (r.ok()) light->vec = glm::normalize(axis);
+    light->radius = sharpness;
+    light->radiance = amplitude;
+  } else if (r.ok()) {
+    r.FailKey("type", "must be directional, sphere or sg, got '" + type + "'");
+  }
+  if (!r.ok()) return Status::Failure(r.error());
+  return Ok();
+}
+
+// "/camera": the rig the camera paths start from.
+Status ReadCameraRig(const nlohmann::json& cj, const std::string& source, CameraRig* rig) {
+  if (!cj.is_object()) return Status::Failure(source + ": /camera: must be an object");
+  FieldReader r(cj, source, "/camera");
+  r.Keys({"target", "distance", "elevation_deg", "azimuth_deg", "fov_y_deg"})
+      .Vec3("target", &rig->target)
+      .Number("distance", &rig->distance, 1e-6, kMaxCoordinate)
+      .Number("elevation_deg", &rig->elevation_deg, -89, 89)
+      .Number("azimuth_deg", &rig->azimuth_deg, -1e6, 1e6)
+      .Number("fov_y_deg", &rig->fov_y_deg, 1, 170);
+  if (!r.ok()) return Status::Failure(r.error());
   return Ok();
 }
 
@@ -298,119 +425,21 @@ Result<Scene> SceneFromJson(const nlohmann::json& j, const std::string& source) 
                       std::to_string(kMaxPrimitives) + " are supported");
   int index = 0;
   for (const auto& pj : prims) {
-    const std::string pointer = "/primitives/" + std::to_string(index++);
-    if (!pj.is_object()) return R::Failure(source + ": " + pointer + ": must be an object with a 'type'");
-    FieldReader r(pj, source, pointer);
-    std::string type;
-    r.Require("type").String("type", &type);
-    if (!r.ok()) return R::Failure(r.error());
-    Primitive p;
-    if (type == "sphere") {
-      p.type = Primitive::Type::kSphere;
-      r.Keys({"type", "center", "radius", "normal_map"}).Require("center");
-      r.Vec3("center", &p.a).Number("radius", &p.radius, 0, kMaxCoordinate, true);
-    } else if (type == "capsule") {
-      p.type = Primitive::Type::kCapsule;
-      p.radius = 0.02;
-      r.Keys({"type", "a", "b", "radius", "normal_map"}).Require("a").Require("b");
-      r.Vec3("a", &p.a).Vec3("b", &p.b).Number("radius", &p.radius, 0, kMaxCoordinate, true);
-      if (r.ok() && glm::length(p.b - p.a) < 1e-9) r.FailKey("b", "coincides with 'a': a capsule needs two ends");
-    } else if (type == "plane") {
-      p.type = Primitive::Type::kPlane;
-      p.radius = 0;
-      r.Keys({"type", "height", "bump_slope", "bump_frequency", "normal_map"});
-      r.Number("height", &p.radius, -kMaxCoordinate, kMaxCoordinate)
-          .Number("bump_slope", &p.bump_slope, 0, 10)
-          .Number("bump_frequency", &p.bump_frequency, 0, 1e4);
-      if (r.ok() && p.bump_slope > 0 && p.bump_frequency <= 0)
-        r.FailKey("bump_frequency", "must be > 0 when 'bump_slope' is");
-    } else {
-      r.FailKey("type", "unknown type '" + type + "' (sphere, capsule, plane)");
-    }
-    ReadNormalMap(r, pj, source, pointer, &p);
-    if (!r.ok()) return R::Failure(r.error());
-    s.primitives.push_back(p);
+    auto p = PrimitiveFromJson(pj, source, "/primitives/" + std::to_string(index++));
+    if (!p) return p.failure();
+    s.primitives.push_back(std::move(*p));
   }
-  std::vector<const NormalMap*> maps;
-  std::size_t map_words = 0;
-  for (const Primitive& p : s.primitives)
-    if (p.normal_map && std::find(maps.begin(), maps.end(), p.normal_map.get()) == maps.end()) {
-      maps.push_back(p.normal_map.get());
-      for (const NormalMapLevel& level : p.normal_map->levels) map_words += 3 * level.texels.size();
-    }
-  if (map_words > kMaxNormalMapWords)
-    return R::Failure(source + ": /primitives: the normal maps' mip chains take " + std::to_string(map_words / 3) +
-                      " texels; at most " + std::to_string(kMaxNormalMapWords / 3) +
-                      " fit (about one 2048 x 2048 map; use smaller maps)");
-  if (j.contains("light")) {
-    const auto& lj = j["light"];
-    if (!lj.is_object()) return R::Failure(source + ": /light: must be an object");
-    std::string type = "directional";
-    FieldReader r(lj, source, "/light");
-    r.String("type", &type);
-    if (r.ok() && type == "directional") {
-      glm::dvec3 dir{0, 1, 0}, rad{1, 1, 1};
-      r.Keys({"type", "direction", "irradiance", "shadows"})
-          .Vec3("direction", &dir)
-          .Vec3("irradiance", &rad)
-          .Bool("shadows", &s.light.shadows);
-      if (r.ok() && glm::length(dir) < 1e-9) r.FailKey("direction", "must not be zero");
-      if (r.ok() && glm::any(glm::lessThan(rad, glm::dvec3(0)))) r.FailKey("irradiance", "must be >= 0");
-      s.light.type = shading::LightType::kDirectional;
-      if (r.ok()) s.light.vec = glm::normalize(dir);
-      s.light.radiance = rad;
-    } else if (r.ok() && type == "sphere") {
-      s.light.type = shading::LightType::kSphere;
-      s.light.radius = 0.05;
-      r.Keys({"type", "center", "intensity", "radius", "shadows"})
-          .Vec3("center", &s.light.vec)
-          .Vec3("intensity", &s.light.radiance)
-          .Number("radius", &s.light.radius, 1e-6, kMaxCoordinate)
-          .Bool("shadows", &s.light.shadows);
-      if (r.ok() && glm::any(glm::lessThan(s.light.radiance, glm::dvec3(0)))) r.FailKey("intensity", "must be >= 0");
-    } else if (r.ok() && type == "sg") {
-      // A distant spherical Gaussian (seed 004): amplitude e^(sharpness (axis.l - 1)).
-      glm::dvec3 axis{0, 1, 0}, amplitude{1, 1, 1};
-      double sharpness = 0;
-      if (lj.contains("shadows"))
-        r.FailKey("shadows", "an SG light is a distant lobe over the whole sky and casts no hard shadow; "
-                             "use a directional or sphere light");
-      r.Keys({"type", "axis", "sharpness", "amplitude"})
-          .Require("axis")
-          .Require("sharpness")
-          .Require("amplitude")
-          .Vec3("axis", &axis)
-          .Number("sharpness", &sharpness, 0, kMaxSgSharpness)
-          .Vec3("amplitude", &amplitude);
-      if (r.ok() && glm::length(axis) < 1e-9) r.FailKey("axis", "must not be zero");
-      if (r.ok() && glm::any(glm::lessThan(amplitude, glm::dvec3(0)))) r.FailKey("amplitude", "must be >= 0");
-      s.light.type = shading::LightType::kSg;
-      if (r.ok()) s.light.vec = glm::normalize(axis);
-      s.light.radius = sharpness;
-      s.light.radiance = amplitude;
-    } else if (r.ok()) {
-      r.FailKey("type", "must be directional, sphere or sg, got '" + type + "'");
-    }
-    if (!r.ok()) return R::Failure(r.error());
-  }
+  if (Status m = CheckNormalMapWords(s.primitives, source); !m) return m.failure();
+  if (j.contains("light"))
+    if (Status l = ReadLight(j["light"], source, &s.light); !l) return l.failure();
   if (j.contains("material")) {
     if (!j["material"].is_string()) return R::Failure(source + ": /material: must be a spec string like \"ggx:0.05\"");
     auto m = ParseMaterial(j["material"].get<std::string>(), s.material);
     if (!m) return R::Failure(source + ": /material: " + m.error());
     s.material = *m;
   }
-  if (j.contains("camera")) {
-    const auto& cj = j["camera"];
-    if (!cj.is_object()) return R::Failure(source + ": /camera: must be an object");
-    FieldReader r(cj, source, "/camera");
-    r.Keys({"target", "distance", "elevation_deg", "azimuth_deg", "fov_y_deg"})
-        .Vec3("target", &s.rig.target)
-        .Number("distance", &s.rig.distance, 1e-6, kMaxCoordinate)
-        .Number("elevation_deg", &s.rig.elevation_deg, -89, 89)
-        .Number("azimuth_deg", &s.rig.azimuth_deg, -1e6, 1e6)
-        .Number("fov_y_deg", &s.rig.fov_y_deg, 1, 170);
-    if (!r.ok()) return R::Failure(r.error());
-  }
+  if (j.contains("camera"))
+    if (Status c = ReadCameraRig(j["camera"], source, &s.rig); !c) return c.failure();
   if (Status a = ReadAssets(j, source, s); !a) return a.failure();
   return s;
 }

@@ -66,8 +66,9 @@ void BuildNode(std::vector<PrimNode>& nodes, std::vector<int>& order, int begin,
   nodes[index].skip = static_cast<int>(nodes.size());
 }
 
-// One mesh at word `base`, its normal map's header at `map` (0: none).
-void PackMesh(const PlacedMesh& placed, int base, int map, std::vector<glm::vec4>& words) {
+// One mesh at word `base`, its normal map's header at `map` and its
+// roughness texture's at `roughness` (0: none).
+void PackMesh(const PlacedMesh& placed, int base, int map, int roughness, std::vector<glm::vec4>& words) {
   const TriangleBvh& bvh = placed.bvh;
   const TriangleMesh& mesh = placed.mesh;
   const int nodes = static_cast<int>(bvh.nodes().size());
@@ -91,7 +92,7 @@ void PackMesh(const PlacedMesh& placed, int base, int map, std::vector<glm::vec4
     const glm::vec2 uv = mesh.uv0[v];
     words.push_back({n.x, n.y, n.z, uv.x});
     words.push_back(t);
-    words.push_back({uv.y, float(map), 0.0f, 0.0f});
+    words.push_back({uv.y, float(map), float(roughness), 0.0f});
   }
 }
 
@@ -110,6 +111,7 @@ int SceneFeatures(const Scene& scene) {
     if (p.type == Primitive::Type::kCapsule) mask |= kSceneCapsules;
     if (p.type == Primitive::Type::kPlane) mask |= kScenePlanes | (p.bump_slope != 0 ? kSceneBumps : 0);
     if (p.type == Primitive::Type::kMesh) mask |= kSceneMeshes;
+    if (p.roughness_map) mask |= kSceneRoughnessMaps;
   }
   if (scene.light.shadows) mask |= kSceneShadows;
   return mask;
@@ -158,6 +160,13 @@ std::vector<glm::vec4> PackScene(const Scene& scene) {
       mesh_word[k] = next;
       next += static_cast<int>(PackedMeshWords(*packed[k]->mesh));
     }
+  // Roughness textures (scene.glsl's layout) after the meshes.
+  std::vector<int> roughness_word(packed.size(), 0);
+  for (std::size_t k = 0; k < packed.size(); ++k)
+    if (packed[k]->mesh && packed[k]->roughness_map) {
+      roughness_word[k] = next;
+      next += static_cast<int>(PackedRoughnessWords(*packed[k]->roughness_map));
+    }
   for (std::size_t k = 0; k < packed.size(); ++k) {
     const Primitive& p = *packed[k];
     words.push_back(PrimWord0(p));
@@ -183,7 +192,17 @@ std::vector<glm::vec4> PackScene(const Scene& scene) {
         words.push_back({t.m.z, 0.0f, 0.0f, 0.0f});
       }
   for (std::size_t k = 0; k < packed.size(); ++k)
-    if (packed[k]->mesh) PackMesh(*packed[k]->mesh, mesh_word[k], header_word[k], words);
+    if (packed[k]->mesh) PackMesh(*packed[k]->mesh, mesh_word[k], header_word[k], roughness_word[k], words);
+  for (std::size_t k = 0; k < packed.size(); ++k) {
+    if (!roughness_word[k]) continue;
+    const RoughnessMap& map = *packed[k]->roughness_map;
+    words.push_back({float(map.width), float(map.height), float(roughness_word[k] + 1), 0.0f});
+    for (std::size_t i = 0; i < map.alpha_factor.size(); i += 4) {
+      glm::vec4 w{0.0f};
+      for (std::size_t j = 0; j < 4 && i + j < map.alpha_factor.size(); ++j) w[int(j)] = map.alpha_factor[i + j];
+      words.push_back(w);
+    }
+  }
   return words;
 }
 

@@ -220,6 +220,7 @@ FilteredNdf sampleNdf(SurfaceSample s, ShadingFootprint f, Material m, VariantPa
 }
 
 SampleSums addSample(SampleSums a, SurfaceSample s, Ray ray, Light light, Material m, VariantParams vp, vec4 u) {
+  if ((SCENE_FEATURES & SCENE_ROUGHNESS_MAPS) != 0) m = materialAt(m, s);
   ShadingFootprint f = zeroFootprint(s);
 #ifdef SHIMMER_USER_VARIANT
   f = analyticFootprint(s, ray, light);
@@ -264,6 +265,7 @@ void main() {
     // Pixels past the image edge still run: they are the quad's helper lanes.
     Ray ray = cameraRay(c, pixelCentre(px));
     SurfaceSample s = traceRay(ray, light);
+    if ((SCENE_FEATURES & SCENE_ROUGHNESS_MAPS) != 0) m = materialAt(m, s);
     ShadingFootprint f;
     // A normal-map filter reads the map with the pixel's uv footprint and
     // differences the normals it filtered (renderPixelOracle in pixel.glsl).
@@ -398,6 +400,7 @@ void main() {
     Ray ray = cameraRay(c, pixelCentre(px));
     SurfaceSample s = traceRay(ray, light);
     ShadingFootprint f = analyticFootprint(s, ray, light);
+    if ((SCENE_FEATURES & SCENE_ROUGHNESS_MAPS) != 0) m = materialAt(m, s);
     writeAovs(idx, px, s, shadeSample(s, f, sampleNdf(s, f, m, vp), m, light, VARIANT_ID, vp, QUADRATURE), prev);
   }
 }

@@ -564,11 +564,11 @@ GlintCount glintCountedDraws(int mode, GlintMaterial g, vec2 hpp, GlintFootprint
   real level = clamp(log2(cellMinor), real(0), real(GLINT_MAX_LEVEL));
   int l0 = min(int(floor(level)), GLINT_MAX_LEVEL - 1);
   real t = level - real(l0);
-  real levels[2];  // the two levels' counts, summed as the C++ model sums them
+  // The two levels' counts, summed as the C++ model sums them (0 + L0 is L0).
+  o.count = real(0);
   SHIMMER_DONT_UNROLL
   for (int i = 0; i < 2; i++)
-    levels[i] = glintDb23Level(g, l0 + i, el, cellMinor, p, hpp, o.total * (i == 0 ? real(1) - t : t), w);
-  o.count = levels[0] + levels[1];
+    o.count += glintDb23Level(g, l0 + i, el, cellMinor, p, hpp, o.total * (i == 0 ? real(1) - t : t), w);
   return o;
 }
 

@@ -158,6 +158,25 @@ SurfaceSample surfaceAt(int prim, vec3 p, vec3 eye, Light light) {
   return surfaceOfPrim(loadPrim(prim), prim, p, eye, light);
 }
 
+// The material at sample s: a mesh's roughness texture scales alpha by its
+// texel's (G / mean G)^2 there (scene.glsl, "Roughness textures"), read at
+// level 0 as nm-point reads a normal map, so that the material's alpha is
+// the texture's mean. Callers test SCENE_ROUGHNESS_MAPS first, so that the
+// kernels of scenes without a roughness texture hold no trace of the call
+// (their SPIR-V, hence their job ids, stay as they were).
+Material materialAt(Material m, SurfaceSample s) {
+#ifdef SHIMMER_MESHES
+  if ((SCENE_FEATURES & SCENE_ROUGHNESS_MAPS) == 0 || s.prim < 0) return m;
+  Prim pr = loadPrim(s.prim);
+  if (!isTriangle(pr)) return m;
+  int header = triangleRoughnessMap(pr);
+  if (header == 0) return m;
+  real k = roughnessFactorAt(header, triangleUv(pr, s.p));
+  m.alpha = min(max(m.alpha * k, vec2(real(1e-4), real(1e-4))), vec2(real(1), real(1)));
+#endif
+  return m;
+}
+
 // Sample s (of any primitive) seen through normal-map filter nf; a missed
 // sample stays missed.
 SurfaceSample filteredSample(SurfaceSample s, vec3 eye, Light light, NormalMapFilter nf) {
@@ -544,6 +563,7 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
   FilteredCentre fc;
   Ray ray = cameraRay(c, pixelCentre(px));
   r.s = traceRay(ray, light);
+  if ((SCENE_FEATURES & SCENE_ROUGHNESS_MAPS) != 0) m = materialAt(m, r.s);
   GlintFootprint gf;  // set below for glint materials only
   if (r.s.prim < 0 || derivMode == DERIV_ANALYTIC) {
     if (nmf != NMF_NONE) {

@@ -48,9 +48,10 @@ const int SCENE_BUMPS = 8;  // planes with a normal pattern
 const int SCENE_NORMAL_MAPS = 16;  // primitives with a normal map
 const int SCENE_MESHES = 32;  // triangle meshes (with SHIMMER_MESHES)
 const int SCENE_SHADOWS = 64;  // the light casts shadows: every shaded point traces a ray to it
+const int SCENE_ROUGHNESS_MAPS = 128;  // meshes whose roughness texture scales alpha per texel
 #ifndef SHIMMER_SCENE_FEATURES
-const int SCENE_FEATURES =
-    SCENE_SPHERES | SCENE_CAPSULES | SCENE_PLANES | SCENE_BUMPS | SCENE_NORMAL_MAPS | SCENE_MESHES;
+const int SCENE_FEATURES = SCENE_SPHERES | SCENE_CAPSULES | SCENE_PLANES | SCENE_BUMPS | SCENE_NORMAL_MAPS |
+                           SCENE_MESHES | SCENE_ROUGHNESS_MAPS;
 #endif
 const real RAY_TMIN = real(1e-4);
 const real RAY_TMAX = real(1e30);
@@ -910,6 +911,43 @@ vec2 triangleUv(Prim p, vec3 q) {
   TriangleCorners c = triangleCorners(p);
   vec3 b = barycentricsAt(c, q);
   return vertexUv(c.v0) * b.x + vertexUv(c.v1) * b.y + vertexUv(c.v2) * b.z;
+}
+
+// ---- Roughness textures ------------------------------------------------------
+// A mesh's roughness texture (renderer/scene/scene_packing.cpp): a header
+// (width, height, first texel word, 0), then per texel the factor
+// (G / mean G)^2 by which the material's alpha is scaled there, four texels
+// a word, row 0 at v = 0; uv repeats (glTF's default sampler). A triangle's
+// vertex words name the header (0: none).
+int triangleRoughnessMap(Prim p) { return int(sceneWord(int(sceneWord(int(p.radius)).w) + 2).z); }
+
+real roughnessTexel(int first, int w, int x, int y) {
+  int i = y * w + x;
+  vec4 q = sceneWord(first + i / 4);
+  int k = i - (i / 4) * 4;
+  return k == 0 ? q.x : (k == 1 ? q.y : (k == 2 ? q.z : q.w));
+}
+
+// Texel index i (a whole number) wrapped into [0, n).
+int wrapTexel(real i, int n) { return min(int(i - real(n) * floor(i / real(n))), n - 1); }
+
+// Bilinear on level 0 at uv, texel centres at half-integers as GL samples.
+real roughnessFactorAt(int header, vec2 uv) {
+  vec4 hd = sceneWord(header);
+  int w = int(hd.x);
+  int h = int(hd.y);
+  int first = int(hd.z);
+  real tx = uv.x * real(w) - real(0.5);
+  real ty = uv.y * real(h) - real(0.5);
+  real fx = floor(tx);
+  real fy = floor(ty);
+  int x0 = wrapTexel(fx, w);
+  int x1 = wrapTexel(fx + real(1), w);
+  int y0 = wrapTexel(fy, h);
+  int y1 = wrapTexel(fy + real(1), h);
+  real top = mix(roughnessTexel(first, w, x0, y0), roughnessTexel(first, w, x1, y0), tx - fx);
+  real bottom = mix(roughnessTexel(first, w, x0, y1), roughnessTexel(first, w, x1, y1), tx - fx);
+  return mix(top, bottom, ty - fy);
 }
 
 #endif

@@ -56,7 +56,7 @@ static_assert(int(LightType::kSg) == glsl_f32::LIGHT_SG && int(LightType::kSpher
 static_assert(kSceneSpheres == glsl_f32::SCENE_SPHERES && kSceneCapsules == glsl_f32::SCENE_CAPSULES &&
               kScenePlanes == glsl_f32::SCENE_PLANES && kSceneBumps == glsl_f32::SCENE_BUMPS &&
               kSceneNormalMaps == glsl_f32::SCENE_NORMAL_MAPS && kSceneMeshes == glsl_f32::SCENE_MESHES &&
-              kSceneShadows == glsl_f32::SCENE_SHADOWS);
+              kSceneShadows == glsl_f32::SCENE_SHADOWS && kSceneRoughnessMaps == glsl_f32::SCENE_ROUGHNESS_MAPS);
 
 namespace {
 

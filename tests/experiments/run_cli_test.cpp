@@ -392,13 +392,13 @@ TEST(RunCli, TheConvergenceCheckMeasuresEveryKthFrameOfTheShot) {
     EXPECT_EQ(shot.frame_stride, 2);
     EXPECT_EQ(shot.check_spp, 4);
     // The check's reference: frames 0, 2 and 4 of the 5, at 30 fps.
-    auto sequence = ReadSequenceFile(ws.dir / "w" / ("check-" + shot.reference_id) / "sequence.json");
+    auto sequence = ReadSequenceFile(ws.dir / "w" / ("check-every2-" + shot.reference_id) / "sequence.json");
     ASSERT_TRUE(sequence) << sequence.error();
     ASSERT_EQ(sequence->frames.size(), 3u);
     EXPECT_DOUBLE_EQ(*sequence->fps, 15.0);
     for (int i = 0; i < 3; ++i) EXPECT_NEAR(sequence->frames[i].time_s, 2 * i / 30.0, 1e-12) << i;
-    EXPECT_TRUE(fs::exists(ws.dir / "w" / ("check-" + shot.reference_id) / "frame_0002.exr"));
-    EXPECT_FALSE(fs::exists(ws.dir / "w" / ("check-" + shot.reference_id) / "frame_0003.exr"));
+    EXPECT_TRUE(fs::exists(ws.dir / "w" / ("check-every2-" + shot.reference_id) / "frame_0002.exr"));
+    EXPECT_FALSE(fs::exists(ws.dir / "w" / ("check-every2-" + shot.reference_id) / "frame_0003.exr"));
     EXPECT_EQ(shot.converged, shot.d_energy_bias <= 0.02 && shot.d_tv_ref <= 0.1 && shot.d_tv_err <= 0.1);
   }
   // The report says which frames were checked.

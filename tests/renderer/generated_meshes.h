@@ -79,4 +79,27 @@ inline std::filesystem::path WriteMeshScene(const std::filesystem::path& dir, co
   return file;
 }
 
+// The square [-1, 1]^2 at y = 0 facing +y, u = (x + 1) / 2, with an MTL
+// roughness texture (map_Pr, 8 x 8 grey): G = 64 on its four left columns
+// and 192 on its four right ones, so (G / mean G)^2 is 0.25 for u < 1/2 and
+// 2.25 above; and a scene file `quad.json` that places it under a light
+// from above, seen from 60 degrees up. `textured` false leaves map_Pr out.
+inline std::filesystem::path WriteRoughnessQuad(const std::filesystem::path& dir, bool textured = true) {
+  std::ofstream(dir / "quad.obj") << "mtllib quad.mtl\nv -1 0 1\nv 1 0 1\nv 1 0 -1\nv -1 0 -1\n"
+                                     "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 1 0\nusemtl m\n"
+                                     "f 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n";
+  std::ofstream(dir / "quad.mtl") << "newmtl m\nPr 0.5\nKd 0.5 0.5 0.5\n" << (textured ? "map_Pr rough.pgm\n" : "");
+  // A binary PGM: 8 x 8 texels, one byte each.
+  std::ofstream pgm(dir / "rough.pgm", std::ios::binary);
+  pgm << "P5\n8 8\n255\n";
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) pgm.put(static_cast<char>(x < 4 ? 64 : 192));
+  pgm.close();
+  const std::filesystem::path file = dir / "quad.json";
+  std::ofstream(file) << R"({"name": "roughness-quad", "assets": [{"file": "quad.obj"}],
+  "light": {"type": "directional", "direction": [0, 1, 0.3]},
+  "camera": {"distance": 3, "elevation_deg": 60, "fov_y_deg": 40}})";
+  return file;
+}
+
 }  // namespace shimmer::testing

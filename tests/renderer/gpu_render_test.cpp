@@ -215,6 +215,62 @@ TEST(GpuOracle, ShadowedScenes) {
     }
 }
 
+// A roughness texture on the GPU: the filters against the oracle on the
+// generated quad and the panel (whose texture's bands run 0.1-0.35), and
+// the reference against a known answer: where a pixel's whole footprint lies
+// in the quad's left or right half, every sample's alpha is the material's
+// times 0.25 or 2.25, so the reference equals the untextured quad's with
+// that alpha.
+TEST(GpuOracle, RoughnessTextures) {
+  shimmer::testing::TempDir dir, plain_dir;
+  const std::string quad = shimmer::testing::WriteRoughnessQuad(dir.path()).string();
+  const std::string panel = std::string(SHIMMER_SOURCE_DIR) + "/experiments/scenes/panel.json";
+  for (auto d : {DerivativeSource::kQuadFine, DerivativeSource::kAnalytic})
+    for (const char* v : {"none", "tk19"}) {
+      ExpectMatchesOracle(quad, v, d);
+      ExpectMatchesOracle(panel, v, d);
+    }
+  ExpectMatchesOracle(panel, "nm-point", DerivativeSource::kQuadFine);
+
+  auto reference = [](const std::string& scene, double alpha) {
+    RenderSettings s = Settings(scene, "none", DerivativeSource::kQuadFine, 32);
+    s.material.alpha = {alpha, alpha};
+    s.reference_spp = 4;
+    s.reference_replicates = 2;
+    std::unique_ptr<Renderer> r;
+    Frame f = RenderOne(s, 0, &r);
+    return std::pair{f, r->camera(0)};
+  };
+  const std::string plain = shimmer::testing::WriteRoughnessQuad(plain_dir.path(), false).string();
+  const auto [textured, cam] = reference(quad, 0.2);
+  int compared = 0;
+  for (double factor : {0.25, 2.25}) {
+    const Frame expected = reference(plain, 0.2 * factor).first;
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 32; ++x) {
+        // The pixel's four corners all in the half whose factor this is.
+        bool inside = true;
+        for (double cx : {0.0, 1.0})
+          for (double cy : {0.0, 1.0}) {
+            const glm::dvec3 d = RayDirection(cam, x + cx, y + cy);
+            if (d.y >= 0) {
+              inside = false;
+              continue;
+            }
+            const double u = (cam.pos.x - d.x * cam.pos.y / d.y + 1) / 2;
+            inside = inside && (factor < 1 ? u > 0.1 && u < 0.4 : u > 0.6 && u < 0.9);
+          }
+        if (!inside) continue;
+        ++compared;
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(textured.at(kSpecularR + c, x, y), expected.at(kSpecularR + c, x, y),
+                      1e-4 * std::abs(expected.at(kSpecularR + c, x, y)) + 1e-6)
+              << x << "," << y << " factor " << factor;
+      }
+  }
+  EXPECT_GT(compared, 100);
+}
+
 TEST(GpuRender, NormalMapFiltersNeedANormalMap) {
   RenderSettings s = Settings("sphere", "toksvig", DerivativeSource::kQuadFine, 16);
   auto r = Renderer::Create(s);

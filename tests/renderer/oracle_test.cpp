@@ -5,8 +5,10 @@
 #include <cmath>
 #include <cstdio>
 
+#include "generated_meshes.h"
 #include "shimmer/renderer/scene.h"
 #include "shimmer/shading/shading.h"
+#include "temp_dir.h"
 
 namespace shimmer {
 namespace {
@@ -156,6 +158,58 @@ TEST(Oracle, ShadowsFallWhereTheRayToTheLightMeetsAnOccluder) {
     EXPECT_GT(dark, 50);
     EXPECT_GT(lit, 500);
   }
+}
+
+// A mesh's roughness texture scales the alpha in use per texel by
+// (G / mean G)^2 (scene.glsl, "Roughness textures"): on a quad whose texture
+// has G = 64 on its left half and 192 on its right, a pixel whose point lies
+// well inside a half (its bilinear read all one value) shades exactly as the
+// untextured quad does with alpha x 0.25 or x 2.25, with every filter and
+// derivative source; the texture's mean is the material's alpha.
+TEST(Oracle, ARoughnessTextureScalesAlphaByItsTexel) {
+  shimmer::testing::TempDir textured_dir, plain_dir;
+  scene::Scene textured = scene::LoadScene(shimmer::testing::WriteRoughnessQuad(textured_dir.path()).string()).value();
+  scene::Scene plain = scene::LoadScene(shimmer::testing::WriteRoughnessQuad(plain_dir.path(), false).string()).value();
+  ASSERT_TRUE(textured.primitives.at(0).roughness_map);
+  ASSERT_FALSE(plain.primitives.at(0).roughness_map);
+  EXPECT_NE(scene::SceneFeatures(textured) & shading::kSceneRoughnessMaps, 0);
+  EXPECT_EQ(scene::SceneFeatures(plain) & shading::kSceneRoughnessMaps, 0);
+  // The asset's own material: alpha = (Pr x mean G)^2, mean G = 128 / 255.
+  EXPECT_NEAR(textured.material.alpha.x, std::pow(0.5 * 128 / 255, 2), 1e-12);
+  const auto textured_words = scene::PackScene(textured), plain_words = scene::PackScene(plain);
+  const int size = 48;
+  shading::CameraDesc cam = scene::CameraAt(scene::CameraPath::kStatic, textured.rig, 0, 30, size, size);
+  shading::MaterialDesc base;
+  base.alpha = {0.2, 0.2};
+  int left = 0, right = 0;
+  for (const char* variant : {"none", "tk19", "k16-ggx-rect-stable"})
+    for (auto d : {shading::DerivativeSource::kQuadFine, shading::DerivativeSource::kAnalytic})
+      for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+          const shading::VariantInfo* info = shading::FindVariant(variant);
+          ASSERT_NE(info, nullptr);
+          const int id = info->id;
+          const auto params = shading::ResolveParams(*info, {}).value();
+          auto r = shading::ShadePixel(textured_words, cam, textured.light, base, id, d, params, {x, y});
+          if (!r.hit) continue;
+          double sx = cam.tan_half_fov_y * cam.width / cam.height, sy = cam.tan_half_fov_y;
+          glm::dvec3 dir = glm::normalize(cam.fwd + cam.right * ((2 * (x + 0.5) / size - 1) * sx) +
+                                          cam.up * ((1 - 2 * (y + 0.5) / size) * sy));
+          const double u = (cam.pos.x + dir.x * r.depth + 1) / 2;
+          double factor = 0;
+          if (u > 0.1 && u < 0.4) factor = 0.25, ++left;
+          if (u > 0.6 && u < 0.9) factor = 2.25, ++right;
+          if (factor == 0) continue;
+          shading::MaterialDesc scaled = base;
+          scaled.alpha = base.alpha * factor;
+          auto expected = shading::ShadePixel(plain_words, cam, plain.light, scaled, id, d, params, {x, y});
+          ASSERT_TRUE(expected.hit);
+          const glm::dvec3 a = r.specular, b = expected.specular;
+          EXPECT_NEAR(a.x, b.x, 1e-9 * (1 + std::abs(b.x))) << variant << " " << x << "," << y << " u " << u;
+          EXPECT_NEAR(a.y + a.z, b.y + b.z, 1e-9 * (1 + std::abs(b.y + b.z))) << variant << " " << x << "," << y;
+        }
+  EXPECT_GT(left, 200);
+  EXPECT_GT(right, 200);
 }
 
 // On a large smooth sphere the ray-differential derivatives equal the quad

@@ -46,6 +46,16 @@ Result<std::shared_ptr<const PlacedMesh>> PlaceAsset(const std::filesystem::path
 // The words PackScene writes for the mesh.
 std::size_t PackedMeshWords(const PlacedMesh& mesh);
 
+// A mesh's roughness texture as the kernel reads it (scene.glsl, "Roughness
+// textures"): per texel the factor (G / mean G)^2 by which the material's
+// alpha is scaled there, row 0 at v = 0 (glTF's uv), repeating.
+struct RoughnessMap {
+  int width = 0, height = 0;
+  std::vector<float> alpha_factor;  // width x height, row by row
+};
+// The words PackScene writes for it: a header, then four texels a word.
+std::size_t PackedRoughnessWords(const RoughnessMap& map);
+
 struct Primitive {
   // kMesh: a placed asset; a and b hold its bounds.
   enum class Type { kSphere = 0, kCapsule = 1, kPlane = 2, kMesh = 3 };
@@ -61,6 +71,8 @@ struct Primitive {
   NormalMapSource normal_map_source;
   glm::dvec2 normal_map_scale{1, 1};
   std::shared_ptr<const PlacedMesh> mesh;  // kMesh
+  // kMesh: the asset's roughness texture (RoughnessMapOfMesh); null: none.
+  std::shared_ptr<const RoughnessMap> roughness_map;
 };
 
 // Where the camera paths start: looking at `target` from `distance`, at
@@ -104,8 +116,14 @@ Primitive MeshPrimitive(std::shared_ptr<const PlacedMesh> mesh);
 // Appendix B) as GGX with alpha = roughness^2, f0 = mix(0.04, base colour,
 // metallic) and diffuse albedo = base colour * (1 - metallic). A roughness
 // texture (glTF: G; MTL map_Pr: its one channel) multiplies the factor by
-// its mean over the image, since a scene shades with one alpha.
+// its mean over the image: the material's alpha is the texture's mean, and
+// RoughnessMapOfMesh its variation.
 Result<shading::MaterialDesc> MaterialOfMesh(const MeshMaterial& m);
+// The mesh's roughness texture as per-texel factors (G / mean G)^2 of
+// whichever material's alpha shades the mesh (its own or a scene's or the
+// command line's): the glTF roughness r x G, squared, over its mean. Null
+// when the mesh has no roughness texture or one without variation.
+Result<std::shared_ptr<const RoughnessMap>> RoughnessMapOfMesh(const MeshMaterial& m);
 // The asset's normal texture as a normal map (its glTF `scale` as the
 // strength), where the asset entry names none: null when the mesh has no
 // normal texture. An embedded image (data URI, GLB) is refused with a

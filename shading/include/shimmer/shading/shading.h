@@ -214,8 +214,9 @@ inline constexpr int kSceneBumps = 8;  // planes with a normal pattern
 inline constexpr int kSceneNormalMaps = 16;
 inline constexpr int kSceneMeshes = 32;
 inline constexpr int kSceneShadows = 64;  // the light casts shadows (LightDesc::shadows), not a primitive kind
+inline constexpr int kSceneRoughnessMaps = 128;  // meshes with a roughness texture
 inline constexpr int kAllSceneFeatures =
-    kSceneSpheres | kSceneCapsules | kScenePlanes | kSceneBumps | kSceneNormalMaps | kSceneMeshes;
+    kSceneSpheres | kSceneCapsules | kScenePlanes | kSceneBumps | kSceneNormalMaps | kSceneMeshes | kSceneRoughnessMaps;
 // --- Normal maps (normal_map.glsl, scene.glsl), in double ---------------------
 
 // Primitive `prim`'s uv at point p, its geometric tangent frame (t, b, n)

@@ -169,39 +169,72 @@ Result<shading::Spirv> SpecializedModule(const KernelModule& kernel, std::span<c
 
 }  // namespace
 
-Result<std::string> SpecializedKernelHash(const KernelModule& kernel, std::span<const std::int32_t> specialization) {
+namespace {
+
+// "alu transcendental memory control", the census as kept on disk.
+std::string CensusText(const shading::InstructionCensus& c) {
+  return std::to_string(c.alu) + ' ' + std::to_string(c.transcendental) + ' ' + std::to_string(c.memory) + ' ' +
+         std::to_string(c.control);
+}
+
+std::optional<shading::InstructionCensus> ParseCensus(const std::string& text) {
+  std::istringstream in(text);
+  shading::InstructionCensus c;
+  if (!(in >> c.alu >> c.transcendental >> c.memory >> c.control) || c.alu < 0 || c.transcendental < 0 ||
+      c.memory < 0 || c.control < 0)
+    return std::nullopt;
+  return c;
+}
+
+// The canonical hash (job ids) and instruction census (the benchmark's
+// device-independent cost) of a specialized kernel. Canonicalizing inlines
+// the whole kernel, about 0.7 s on lavapipe's machines, and both come from
+// one canonicalization; the two are kept per process and on disk, so a
+// benchmark batch counts nothing the run's job ids have not already made.
+Result<shading::KernelSummary> SpecializedKernelSummary(const KernelModule& kernel,
+                                                        std::span<const std::int32_t> specialization) {
   static std::mutex mutex;
-  static auto* hashes = new std::map<std::string, std::string>;  // leaked, like the caches
+  static auto* summaries = new std::map<std::string, shading::KernelSummary>;  // leaked, like the caches
   const std::string key = SpecializedKey(kernel, specialization);
   {
     std::lock_guard lock(mutex);
-    if (auto it = hashes->find(key); it != hashes->end()) return it->second;
+    if (auto it = summaries->find(key); it != summaries->end()) return it->second;
   }
-  // Canonicalizing inlines the whole kernel (about 0.5 s on lavapipe's
-  // machines): the 16 digits are kept on disk beside the modules.
-  const auto folder = CacheFolder("kernel-hashes");
+  const auto hashes = CacheFolder("kernel-hashes");
+  const auto censuses = CacheFolder("kernel-census");
   const std::string file = Fnv1a64Hex(key + '\0' + shading::CanonicalHashVersion()) + ".txt";
-  std::optional<std::string> hash;
-  if (folder)
-    if (auto cached = ReadCacheFile(*folder / file, "kernel-hash"); cached && cached->size() == 16) hash = *cached;
-  if (!hash) {
+  std::optional<shading::KernelSummary> summary;
+  if (hashes && censuses)
+    if (auto hash = ReadCacheFile(*hashes / file, "kernel-hash"); hash && hash->size() == 16)
+      if (auto text = ReadCacheFile(*censuses / file, "kernel-census"))
+        if (auto census = ParseCensus(*text)) summary = shading::KernelSummary{*hash, *census};
+  if (!summary) {
     auto specialized = SpecializedModule(kernel, specialization);
     if (!specialized) return specialized.failure();
-    auto made = shading::CanonicalSpirvHash(*specialized);
+    auto made = shading::SummarizeKernel(*specialized);
     if (!made) return made.failure();
-    hash = *made;
-    if (folder) WriteTrimmed(*folder, file, "kernel-hash", *hash);
+    summary = *made;
+    if (hashes) WriteTrimmed(*hashes, file, "kernel-hash", summary->hash);
+    if (censuses) WriteTrimmed(*censuses, file, "kernel-census", CensusText(summary->census));
   }
   std::lock_guard lock(mutex);
-  hashes->emplace(key, *hash);
-  return *hash;
+  summaries->emplace(key, *summary);
+  return *summary;
+}
+
+}  // namespace
+
+Result<std::string> SpecializedKernelHash(const KernelModule& kernel, std::span<const std::int32_t> specialization) {
+  auto summary = SpecializedKernelSummary(kernel, specialization);
+  if (!summary) return summary.failure();
+  return summary->hash;
 }
 
 Result<shading::InstructionCensus> SpecializedKernelCensus(const KernelModule& kernel,
                                                            std::span<const std::int32_t> specialization) {
-  auto specialized = SpecializedModule(kernel, specialization);
-  if (!specialized) return specialized.failure();
-  return shading::CountInstructions(*specialized);
+  auto summary = SpecializedKernelSummary(kernel, specialization);
+  if (!summary) return summary.failure();
+  return summary->census;
 }
 
 struct PipelineSlot {

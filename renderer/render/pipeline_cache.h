@@ -47,7 +47,8 @@ bool CountsGlints(int variant_id);
 // specialized module comes from the disk cache when it is there.
 Result<std::string> SpecializedKernelHash(const KernelModule& kernel, std::span<const std::int32_t> specialization);
 
-// shading::CountInstructions of the same specialized module (not kept).
+// shading::CountInstructions of the same specialized module, kept beside
+// its hash (one canonicalization makes both).
 Result<shading::InstructionCensus> SpecializedKernelCensus(const KernelModule& kernel,
                                                            std::span<const std::int32_t> specialization);
 

@@ -233,23 +233,20 @@ bool MemoryStorage(std::uint32_t storage_class) {
 // Bump when the passes or the structural hash change.
 std::string CanonicalHashVersion() { return "structural-1 " + SpecializerVersion(); }
 
-Result<std::string> CanonicalSpirvHash(const Spirv& module) {
-  auto instructions = CanonicalInstructions(module);
-  if (!instructions) return instructions.failure();
-  const std::uint64_t h = StructuralHash(std::move(*instructions)).Module();
+namespace {
+
+std::string HexOf(std::uint64_t h) {
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
   return std::string(hex);
 }
 
-Result<InstructionCensus> CountInstructions(const Spirv& module) {
-  auto instructions = CanonicalInstructions(module);
-  if (!instructions) return instructions.failure();
+InstructionCensus CensusOf(const std::vector<Instruction>& instructions) {
   InstructionCensus census;
   std::uint32_t glsl_set = 0;
   std::unordered_map<std::uint32_t, std::uint32_t> storage;  // pointer id -> storage class
   bool in_function = false;
-  for (const Instruction& x : *instructions) {
+  for (const Instruction& x : instructions) {
     const auto& w = x.words;
     switch (x.opcode) {
       case spv::OpExtInstImport: glsl_set = x.result; continue;
@@ -304,6 +301,29 @@ Result<InstructionCensus> CountInstructions(const Spirv& module) {
     }
   }
   return census;
+}
+
+}  // namespace
+
+Result<std::string> CanonicalSpirvHash(const Spirv& module) {
+  auto instructions = CanonicalInstructions(module);
+  if (!instructions) return instructions.failure();
+  return HexOf(StructuralHash(std::move(*instructions)).Module());
+}
+
+Result<InstructionCensus> CountInstructions(const Spirv& module) {
+  auto instructions = CanonicalInstructions(module);
+  if (!instructions) return instructions.failure();
+  return CensusOf(*instructions);
+}
+
+Result<KernelSummary> SummarizeKernel(const Spirv& module) {
+  auto instructions = CanonicalInstructions(module);
+  if (!instructions) return instructions.failure();
+  KernelSummary summary;
+  summary.census = CensusOf(*instructions);
+  summary.hash = HexOf(StructuralHash(std::move(*instructions)).Module());
+  return summary;
 }
 
 }  // namespace shimmer::shading

@@ -62,6 +62,13 @@ Result<std::string> CanonicalSpirvHash(const Spirv& module);
 // normalize, distance and division; `control` is branches and barriers;
 // `alu` is the rest of the arithmetic, comparisons, conversions and selects.
 Result<InstructionCensus> CountInstructions(const Spirv& module);
+// Both from one canonicalization, which is nearly all of either's cost
+// (about 0.7 s for a filter kernel).
+struct KernelSummary {
+  std::string hash;  // CanonicalSpirvHash
+  InstructionCensus census;  // CountInstructions
+};
+Result<KernelSummary> SummarizeKernel(const Spirv& module);
 // Names the canonical form (its passes and the optimizer's version), for
 // cache keys of canonical hashes.
 std::string CanonicalHashVersion();

@@ -200,6 +200,7 @@ Result<std::vector<BenchmarkCost>> RunBenchmark(const BenchmarkBatch& batch, con
         k == 0 ? RatioEstimate{1, 1, 1, static_cast<int>(ms[0].size())} : PairedRatio(ms[k], paired[k]);
     c.ratio_to_none = ratio.ratio;
     c.ratio_lo = ratio.lo;
+    c.precision = bench.precision;
     c.ratio_hi = ratio.hi;
     c.kernel = census[k];
     c.none_kernel = census.front();

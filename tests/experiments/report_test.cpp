@@ -660,6 +660,34 @@ TEST(Report, WritesTablesCsvAndPlotScripts) {
   EXPECT_FALSE(fs::exists(dir.path() / "empty"));
 }
 
+// The Method section names the precision the costs were timed to (each
+// row's own, the spec's benchmark.precision) and counts those that reached
+// it: a ratio of 1.2 [1.15, 1.25] is within ±5 % but not within ±3 %.
+TEST(Report, CostPrecisionIsTheOneTheCostsWereTimedTo) {
+  auto method = [](double precision) {
+    TempDir dir;
+    std::vector<JobResult> rows;
+    for (const char* v : {"none", "tk19", "supersample-2"}) {
+      rows.push_back(MakeResult(v, 1.0, 2.0));
+      Bench(rows.back(), v == std::string("none") ? 1.0 : 1.2);
+      BenchmarkCost& c = *rows.back().cost;
+      c.precision = precision;
+      const double half = v == std::string("tk19") ? 0.05 : 0.3;  // supersample-2 stopped at the cap
+      c.ratio_lo = c.ratio_to_none - half, c.ratio_hi = c.ratio_to_none + half;
+    }
+    std::vector<std::string> warnings;
+    EXPECT_TRUE(WriteReport(rows, "t", (dir.path() / "rep").string(), &warnings));
+    return ReadText(dir.path() / "rep" / "report.md");
+  };
+  const std::string at5 = method(0.05), at3 = method(0.03);
+  EXPECT_NE(at5.find("each variant timed until its interval is within ±5 % or the spec's cap was reached (1 of 2 "
+                     "costs here reached it)"),
+            std::string::npos)
+      << at5;
+  EXPECT_NE(at3.find("within ±3 % or the spec's cap was reached (0 of 2 costs here reached it)"), std::string::npos)
+      << at3;
+}
+
 // The spectra of a group of twenty variants: twenty different line styles,
 // where gnuplot's own cycle repeats after eight.
 TEST(Report, SpectraOfManyVariantsLookDifferent) {

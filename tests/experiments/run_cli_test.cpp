@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "cli_run.h"
+#include "kernel_disk_cache.h"
 #include "shimmer/core/sequence_file.h"
 #include "shimmer/experiments/result_store.h"
 
@@ -298,6 +299,76 @@ TEST(RunCli, ShotsAreCheckedAndVariantsBenchmarkedOnce) {
     else
       EXPECT_EQ(c.median_ms, was->median_ms) << c.variant;
   }
+}
+
+// A benchmark batch reads each kernel's instruction census from the kernel
+// cache, where the run's job ids left it beside the kernel's hash: a census
+// planted in the cache is the one stored, and a damaged one is named,
+// counted again and rewritten.
+TEST(RunCli, BenchmarksReadEachKernelsCensusFromTheCacheBesideItsHash) {
+  Workspace ws;
+  const fs::path cache = ws.dir / "cache";
+  auto run = [&](const std::string& db) {
+    const std::string command = "cd " + ws.dir.string() + " && XDG_CACHE_HOME=" + cache.string() + " exec " +
+                                SHIMMER_EXE + " run tiny.json --db " + db + " --work " + db +
+                                ".frames --no-check >>log.txt 2>&1";
+    return std::system(command.c_str());
+  };
+  auto censuses = [&](const std::string& db) {
+    std::map<std::string, shading::InstructionCensus> by_variant;
+    auto store = ResultStore::Open((ws.dir / db).string(), ResultStore::Mode::kReadOnly);
+    EXPECT_TRUE(store) << store.error();
+    if (!store) return by_variant;
+    auto costs = (*store)->Benchmarks();
+    EXPECT_TRUE(costs) << costs.error();
+    if (costs)
+      for (const BenchmarkCost& c : *costs) by_variant[c.variant + nlohmann::json(c.params).dump()] = c.kernel;
+    return by_variant;
+  };
+  auto files = [&](const char* folder) {
+    std::vector<fs::path> found;
+    if (fs::exists(cache / "shimmer" / folder))
+      for (const auto& e : fs::directory_iterator(cache / "shimmer" / folder)) found.push_back(e.path());
+    return found;
+  };
+  ASSERT_EQ(run("a.db"), 0) << ReadText(ws.dir / "log.txt");
+  const auto counted = censuses("a.db");
+  ASSERT_EQ(counted.size(), 4u);  // none, k16-beckmann-rect x 2, tk19
+  const auto kept = files("kernel-census");
+  // One census per kernel whose hash was made: the three filters' and the reference's.
+  EXPECT_EQ(kept.size(), files("kernel-hashes").size());
+  ASSERT_GE(kept.size(), 3u);
+  for (const fs::path& f : kept) {
+    auto text = render::ReadCacheFile(f, "kernel-census");
+    ASSERT_TRUE(text) << f;
+    EXPECT_EQ(std::count(text->begin(), text->end(), ' '), 3) << *text;
+  }
+
+  for (const fs::path& f : kept) render::WriteCacheFile(f, "kernel-census", "7 5 3 1");
+  ASSERT_EQ(run("b.db"), 0) << ReadText(ws.dir / "log.txt");
+  for (const auto& [variant, c] : censuses("b.db")) {
+    EXPECT_EQ(c.alu, 7) << variant;
+    EXPECT_EQ(c.transcendental, 5) << variant;
+    EXPECT_EQ(c.memory, 3) << variant;
+    EXPECT_EQ(c.control, 1) << variant;
+  }
+
+  for (const fs::path& f : kept) fs::resize_file(f, fs::file_size(f) / 2);
+  const std::size_t before = ReadText(ws.dir / "log.txt").size();
+  ASSERT_EQ(run("c.db"), 0) << ReadText(ws.dir / "log.txt");
+  const std::string log = ReadText(ws.dir / "log.txt").substr(before);
+  EXPECT_NE(log.find("ignoring the kernel cache file " + kept.front().string()), std::string::npos) << log;
+  const auto recounted = censuses("c.db");
+  ASSERT_EQ(recounted.size(), counted.size());
+  for (const auto& [variant, c] : counted) {
+    const auto again = recounted.find(variant);
+    ASSERT_NE(again, recounted.end()) << variant;
+    EXPECT_EQ(again->second.alu, c.alu) << variant;
+    EXPECT_EQ(again->second.transcendental, c.transcendental) << variant;
+    EXPECT_EQ(again->second.memory, c.memory) << variant;
+    EXPECT_EQ(again->second.control, c.control) << variant;
+  }
+  for (const fs::path& f : kept) EXPECT_TRUE(render::ReadCacheFile(f, "kernel-census")) << f << ": rewritten whole";
 }
 
 // Seed 003's physics: on nm-plane under dolly (minified bumps, the footprint

@@ -63,5 +63,28 @@ void main() {
   EXPECT_EQ(more.alu, base.alu + 4);
 }
 
+// The one canonicalization behind a kernel's cached hash and census gives
+// exactly what the two separate calls give.
+TEST(InstructionCensus, OneSummaryGivesTheHashAndTheCensus) {
+  const std::string text = std::string(R"(#version 450
+layout(local_size_x = 8) in;
+layout(std430, binding = 0) buffer Data { float v[]; } data;
+)") + kBase;
+  auto spirv = CompileCompute({"census.comp", text});
+  ASSERT_TRUE(spirv) << spirv.error();
+  auto summary = SummarizeKernel(*spirv);
+  ASSERT_TRUE(summary) << summary.error();
+  auto hash = CanonicalSpirvHash(*spirv);
+  auto census = CountInstructions(*spirv);
+  ASSERT_TRUE(hash && census);
+  EXPECT_EQ(summary->hash, *hash);
+  EXPECT_EQ(summary->hash.size(), 16u);
+  EXPECT_EQ(summary->census.alu, census->alu);
+  EXPECT_EQ(summary->census.transcendental, census->transcendental);
+  EXPECT_EQ(summary->census.memory, census->memory);
+  EXPECT_EQ(summary->census.control, census->control);
+  EXPECT_EQ(summary->census.transcendental, 2);  // exp, sqrt: the census of kBase
+}
+
 }  // namespace
 }  // namespace shimmer::shading

@@ -68,6 +68,9 @@ struct BenchmarkCost {
   // 95 % interval (RatioEstimate). Older rows: median_ms / none_median_ms
   // and no interval (ratio_lo = ratio_hi = 0).
   double ratio_to_none = 0, ratio_lo = 0, ratio_hi = 0;
+  // The half-width its interval was timed to (the spec's
+  // benchmark.precision); rows stored before it was kept were timed to 3 %.
+  double precision = 0.03;
   std::string device, driver;
   // The kernels it was timed with (BenchmarkKernels): a cost of other
   // kernels is timed again. Older rows: the shading core's text hash.
@@ -94,8 +97,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotCheck, reference_id, scene, 
                                                 tol_tv, unconverged_pixels, converged)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BenchmarkCost, scene, derivatives, variant, params, material, camera,
                                                 width, height, repetitions, median_ms, min_ms, max_ms, none_median_ms,
-                                                ratio_to_none, ratio_lo, ratio_hi, device, driver, core, kernel,
-                                                none_kernel)
+                                                ratio_to_none, ratio_lo, ratio_hi, precision, device, driver, core,
+                                                kernel, none_kernel)
 
 struct JobResult {
   std::string id;

@@ -167,10 +167,6 @@ Result<shading::Spirv> SpecializedModule(const KernelModule& kernel, std::span<c
                      [&] { return shading::SpecializeCompute(kernel.spirv, specialization); });
 }
 
-}  // namespace
-
-namespace {
-
 // "alu transcendental memory control", the census as kept on disk.
 std::string CensusText(const shading::InstructionCensus& c) {
   return std::to_string(c.alu) + ' ' + std::to_string(c.transcendental) + ' ' + std::to_string(c.memory) + ' ' +

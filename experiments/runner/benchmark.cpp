@@ -20,7 +20,6 @@
 #include <cmath>
 #include <map>
 #include <memory>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -84,35 +83,30 @@ RatioEstimate PairedRatio(const std::vector<double>& test_ms, const std::vector<
 
 std::vector<BenchmarkBatch> BenchmarkBatches(const std::vector<Job>& jobs) {
   std::vector<BenchmarkBatch> batches;
-  std::set<std::string> derivative_sources;
-  for (const Job& job : jobs)
-    if (!job.external) derivative_sources.insert(job.derivatives);
   for (const Job& job : jobs) {
     if (job.external) continue;  // its cost is the user's, if they gave one
-    // Variants that read no derivatives cost the same under every source:
-    // they join every batch of their scene, so that each batch has its `none`.
-    for (const std::string& derivatives : derivative_sources) {
-      if (ReadsDerivatives(job.variant) && derivatives != job.derivatives) continue;
-      auto it = std::find_if(batches.begin(), batches.end(), [&](const BenchmarkBatch& b) {
-        return b.scene == job.scene && b.derivatives == derivatives;
-      });
-      if (it == batches.end()) {
-        Job none = AsNone(job);
-        none.derivatives = derivatives;
-        batches.push_back({job.scene, derivatives, {none}});
-        it = batches.end() - 1;
-      }
-      const bool present = std::any_of(it->jobs.begin(), it->jobs.end(), [&](const Job& j) {
-        return j.variant == job.variant && j.params == job.params;
-      });
-      if (present) continue;
-      Job member = it->jobs.front();  // the batch's material, camera and motion
-      member.variant = job.variant;
-      member.params = job.params;
-      member.variant_file = job.variant_file;
-      member.variant_hash = job.variant_hash;
-      it->jobs.push_back(member);
+    // A job is timed in the batch of its own derivative source, the one its
+    // row's cost is joined on. A variant that reads no derivatives has one
+    // job, under the first source (ExpandJobs), so it is timed once, not
+    // again under every other source for a cost no row would read; each
+    // batch has its own `none`, the base of its ratios.
+    auto it = std::find_if(batches.begin(), batches.end(), [&](const BenchmarkBatch& b) {
+      return b.scene == job.scene && b.derivatives == job.derivatives;
+    });
+    if (it == batches.end()) {
+      batches.push_back({job.scene, job.derivatives, {AsNone(job)}});
+      it = batches.end() - 1;
     }
+    const bool present = std::any_of(it->jobs.begin(), it->jobs.end(), [&](const Job& j) {
+      return j.variant == job.variant && j.params == job.params;
+    });
+    if (present) continue;
+    Job member = it->jobs.front();  // the batch's material, camera and motion
+    member.variant = job.variant;
+    member.params = job.params;
+    member.variant_file = job.variant_file;
+    member.variant_hash = job.variant_hash;
+    it->jobs.push_back(member);
   }
   return batches;
 }

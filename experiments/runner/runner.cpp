@@ -105,6 +105,7 @@ Result<render::RenderSettings> ReferenceSettings(const Job& job, const RunOption
   auto reference = ReferenceSettingsOf(job);
   if (!reference) return reference.failure();
   reference->device = options.device;
+  reference->device_lane = options.device_lane;
   reference->compress_exr = options.keep_frames;
   return reference;
 }
@@ -164,6 +165,7 @@ Result<render::RenderSettings> JobSettings(const Job& job, const RunOptions& opt
   auto s = RenderSettingsOf(job);
   if (!s) return s.failure();
   s->device = options.device;
+  s->device_lane = options.device_lane;
   s->compress_exr = options.keep_frames;  // else measured once and deleted
   return s;
 }
@@ -404,8 +406,13 @@ struct JobWorkers {
   // The workers' own state, made here (not by the aggregate initialiser).
   std::mutex mutex{};
   double computed_s = 0;
-  std::atomic<std::size_t> next{0};
   std::atomic<bool> failed{false};
+  // Which jobs a worker took, and the references a worker is rendering now
+  // (guarded by `mutex`): see Claim.
+  std::vector<bool> claimed = std::vector<bool>(jobs.size(), false);
+  std::size_t first_unclaimed = 0;
+  std::map<std::string, int> rendering{};  // reference id -> workers on its shot before it is on disk
+  std::set<std::string> rendered{};
   std::optional<std::map<std::string, std::vector<JobResult>>> stored_rows{};  // for RekeyRow
 
   // The first failure ends the run; the others are dropped.
@@ -416,19 +423,62 @@ struct JobWorkers {
 
   // Renders and measures the job (its reference first, one worker per
   // reference) and stores its row; the seconds it took.
-  Result<double> Compute(const Job& job) {
+  Result<double> Compute(const Job& job, const RunOptions& on_lane, bool& holds_shot) {
     const auto t0 = std::chrono::steady_clock::now();
     if (!job.external) {
       std::lock_guard<std::mutex> lock(reference_locks.at(ReferenceId(job)));
-      if (Status reference = EnsureReference(job, options); !reference) return reference.failure();
+      Status reference = EnsureReference(job, on_lane);
+      Release(job, holds_shot, bool(reference));
+      if (!reference) return reference.failure();
     }
-    auto measured = MeasureJob(job, options);
+    auto measured = MeasureJob(job, on_lane);
     if (!measured) return measured.failure();
     {
       std::lock_guard<std::mutex> lock(mutex);
       if (Status inserted = store.Insert(*measured); !inserted) return inserted.failure();
     }
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+
+  // The next job to compute, or none left. The jobs of one shot follow each
+  // other and share its reference, which one worker renders while the others
+  // would wait on its lock: a worker takes the first job whose reference no
+  // other worker is rendering, so that another shot's reference or a job's
+  // frames go on beside it, and waits only when nothing else is left.
+  struct Claimed {
+    std::size_t index;
+    bool holds_shot;  // counted in `rendering` until Release
+  };
+  std::optional<Claimed> Claim() {
+    std::lock_guard<std::mutex> lock(mutex);
+    while (first_unclaimed < jobs.size() && claimed[first_unclaimed]) ++first_unclaimed;
+    if (first_unclaimed >= jobs.size() || failed) return std::nullopt;
+    std::size_t pick = first_unclaimed;
+    for (std::size_t k = first_unclaimed; k < jobs.size(); ++k) {
+      if (claimed[k]) continue;
+      if (jobs[k].external || !rendering.count(ReferenceId(jobs[k]))) {
+        pick = k;
+        break;
+      }
+    }
+    claimed[pick] = true;
+    Claimed c{pick, false};
+    if (!jobs[pick].external) {
+      const std::string reference = ReferenceId(jobs[pick]);
+      if (!rendered.count(reference)) ++rendering[reference], c.holds_shot = true;
+    }
+    return c;
+  }
+
+  // The claimed job no longer holds its shot back: its reference is on disk
+  // (`ready`), failed, or the job was found done.
+  void Release(const Job& job, bool& holds_shot, bool ready) {
+    if (!holds_shot) return;
+    holds_shot = false;
+    std::lock_guard<std::mutex> lock(mutex);
+    const std::string reference = ReferenceId(job);
+    if (ready) rendered.insert(reference);
+    if (auto it = rendering.find(reference); it != rendering.end() && --it->second <= 0) rendering.erase(it);
   }
 
   void Count(bool done, double seconds, const std::string& what) {
@@ -447,9 +497,12 @@ struct JobWorkers {
     if (options.progress) options.progress(progress);
   }
 
-  void Work() {
-    for (std::size_t k = next++; k < jobs.size() && !failed; k = next++) {
-      const Job& job = jobs[k];
+  // `lane`: the worker's own device (RunOptions::device_lane).
+  void Work(int lane) {
+    RunOptions on_lane = options;
+    on_lane.device_lane = lane;
+    while (std::optional<Claimed> claim = Claim()) {
+      const Job& job = jobs[claim->index];
       const std::string id = JobId(job);
       const std::string what = job.scene + " " + job.material + " " + job.camera + " " + job.variant;
       const std::string who = "job " + id + " (" + what + ")";
@@ -466,10 +519,11 @@ struct JobWorkers {
           if (done && *done) ++summary.rekeyed;
         }
       }
+      if (!done || *done) Release(job, claim->holds_shot, false);
       if (!done) return Stop(who, done.failure());
       double seconds = 0;
       if (!*done) {
-        auto computed = Compute(job);
+        auto computed = Compute(job, on_lane, claim->holds_shot);
         if (!computed) return Stop(who, computed.failure());
         seconds = *computed;
       }
@@ -532,8 +586,8 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
   JobWorkers workers{jobs, options, *store, summary, progress, reference_locks, *counted,
                      std::chrono::steady_clock::now()};
   std::vector<std::thread> threads;
-  for (int i = 1; i < std::max(1, options.jobs); ++i) threads.emplace_back([&] { workers.Work(); });
-  workers.Work();
+  for (int i = 1; i < std::max(1, options.jobs); ++i) threads.emplace_back([&workers, i] { workers.Work(i); });
+  workers.Work(0);
   for (std::thread& t : threads) t.join();
   if (workers.failed) {
     // A store this run created and put nothing into is not left behind.

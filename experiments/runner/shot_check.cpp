@@ -203,11 +203,13 @@ Status CheckShots(const std::vector<Job>& all_jobs, const RunOptions& options, R
   std::mutex mutex;
   std::atomic<std::size_t> next{0};
   std::optional<Error> error;
-  auto worker = [&] {
+  auto worker = [&](int lane) {
+    RunOptions on_lane = options;
+    on_lane.device_lane = lane;  // a device of its own (RunOptions::device_lane)
     for (std::size_t k = next++; k < shots.size(); k = next++) {
       const Job& job = shots[k];
       const std::string what = job.scene + " " + job.material + " " + job.camera;
-      auto check = CheckShot(job, options);
+      auto check = CheckShot(job, on_lane);
       std::lock_guard<std::mutex> lock(mutex);
       if (error) return;
       if (!check) {
@@ -228,8 +230,8 @@ Status CheckShots(const std::vector<Job>& all_jobs, const RunOptions& options, R
     }
   };
   std::vector<std::thread> threads;
-  for (int i = 1; i < std::max(1, options.jobs); ++i) threads.emplace_back(worker);
-  worker();
+  for (int i = 1; i < std::max(1, options.jobs); ++i) threads.emplace_back(worker, i);
+  worker(0);
   for (std::thread& t : threads) t.join();
   if (error) return Status(*error);
   return Ok();

@@ -248,7 +248,7 @@ namespace {
 
 struct DeviceCache {
   std::mutex mutex;
-  std::map<std::pair<std::string, bool>, DeviceHandle> devices;  // (device name, validation)
+  std::map<std::tuple<std::string, bool, int>, DeviceHandle> devices;  // (device name, validation, lane)
 };
 
 // Leaked on purpose, see DeviceHandle.
@@ -312,7 +312,7 @@ Result<DeviceHandle> AcquireDevice(const vk::ContextOptions& options) {
   if (options.lose_device_after_dispatches >= 0) return create();
   DeviceCache& cache = Devices();
   std::lock_guard lock(cache.mutex);
-  DeviceHandle& entry = cache.devices[{options.device_name, options.validation}];
+  DeviceHandle& entry = cache.devices[{options.device_name, options.validation, options.lane}];
   if (!entry.context) {
     auto created = create();
     if (!created) return created.failure();

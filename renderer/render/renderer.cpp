@@ -202,6 +202,7 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
   vk::ContextOptions options;
   options.device_name = settings.device;
   options.validation = settings.validation;
+  options.lane = settings.device_lane;
   options.lose_device_after_dispatches = hooks.lose_device_after_dispatches;
   auto device = AcquireDevice(options);
   if (!device) return device.failure();

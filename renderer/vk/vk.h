@@ -48,6 +48,12 @@ struct ContextOptions {
   // VK_ERROR_DEVICE_LOST, as a reset or hung GPU does; lavapipe never loses
   // its device, so the handling would otherwise go untested. -1: never.
   int lose_device_after_dispatches = -1;
+  // Renders on different lanes get different devices (VkDevice, queue,
+  // command buffer): their dispatches run side by side instead of one after
+  // another behind one queue. On lavapipe a lone dispatch leaves a core idle
+  // at its tail and between frames, so two workers each on their own lane
+  // finish a run's frames sooner.
+  int lane = 0;
 };
 
 // Errors carry ErrorCode::kDeviceLost or kOutOfMemory where Vulkan says so.

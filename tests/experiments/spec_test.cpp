@@ -549,20 +549,40 @@ TEST(Spec, PairedCostRatiosCarryASignedRankInterval) {
   EXPECT_FALSE(few.Within(0.5));
 }
 
-TEST(Spec, BenchmarkBatchesHoldEveryVariantOfAScenesDerivativeSourceWithNoneFirst) {
+TEST(Spec, BenchmarkBatchesTimeEachJobOnceUnderItsOwnSourceWithNoneFirst) {
   auto r = ParseSpec(TrustSpec(""), "v.json");
   ASSERT_TRUE(r) << r.error();
   const auto batches = BenchmarkBatches(ExpandJobs(*r));
-  // 2 scenes x 2 derivative sources; none and supersample-2 join both sources.
+  // 2 scenes x 2 derivative sources. supersample-2 reads no derivatives: its
+  // one job (under quad, the first source) is timed in the quad batch only,
+  // where its row's cost is joined; every batch has its own `none` first.
   ASSERT_EQ(batches.size(), 4u);
   for (const BenchmarkBatch& b : batches) {
-    ASSERT_EQ(b.jobs.size(), 3u) << b.scene << " " << b.derivatives;
-    EXPECT_EQ(b.jobs[0].variant, "none");
+    std::vector<std::string> variants;
     for (const Job& j : b.jobs) {
+      variants.push_back(j.variant);
       EXPECT_EQ(j.scene, b.scene);
       EXPECT_EQ(j.derivatives, b.derivatives);
     }
+    const std::vector<std::string> expected =
+        b.derivatives == "quad" ? std::vector<std::string>{"none", "tk19", "supersample-2"}
+                                : std::vector<std::string>{"none", "tk19"};
+    EXPECT_EQ(variants, expected) << b.scene << " " << b.derivatives;
   }
+  // A scene whose jobs all use one source has no batch under the other.
+  auto quad_only = ParseSpec(
+      TrustSpec(R"(,
+  "groups": [{"scenes": ["nm-plane"], "materials": ["ggx:0.05"], "derivatives": ["quad"],
+              "variants": ["none", "nm-mip"]}])"),
+      "v.json");
+  ASSERT_TRUE(quad_only) << quad_only.error();
+  int nm_batches = 0;
+  for (const BenchmarkBatch& b : BenchmarkBatches(ExpandJobs(*quad_only)))
+    if (b.scene == "nm-plane") {
+      ++nm_batches;
+      EXPECT_EQ(b.derivatives, "quad");
+    }
+  EXPECT_EQ(nm_batches, 1);
 }
 
 }  // namespace

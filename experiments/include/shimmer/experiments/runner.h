@@ -36,6 +36,7 @@ struct RunOptions {
   bool keep_frames = false;
   int jobs = 1;        // jobs measured at once (each renders, then measures)
   std::string device;  // Vulkan device name substring
+  int device_lane = 0;  // set per worker: each renders on a device of its own (vk::ContextOptions::lane)
   // After the jobs: each shot's reference checked at twice the samples per
   // axis (ShotCheck), and the benchmark batches timed (none: skipped).
   bool check_shots = true;

@@ -72,6 +72,7 @@ struct RenderSettings {
   std::uint32_t seed = 0;
   std::string variant_file;  // user variant GLSL defining userVariant(...) (shimmer/shading/user_variant.h)
   std::string device;        // substring of the Vulkan device name
+  int device_lane = 0;       // renders on other lanes dispatch beside this one (vk::ContextOptions::lane)
   std::string preview_png;   // when set: a tone-mapped PNG of frame 0's beauty
   // Khronos validation layer (when installed); anything it reports fails the
   // render. On by default in debug builds.

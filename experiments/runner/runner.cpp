@@ -401,6 +401,7 @@ struct JobWorkers {
   RunSummary& summary;
   RunProgress& progress;
   std::map<std::string, std::mutex>& reference_locks;
+  const std::vector<std::string>& reference_of;  // each job's ReferenceId, made once ("" for external ones)
   int to_compute = 0;
   std::chrono::steady_clock::time_point start;
   // The workers' own state, made here (not by the aggregate initialiser).
@@ -423,12 +424,13 @@ struct JobWorkers {
 
   // Renders and measures the job (its reference first, one worker per
   // reference) and stores its row; the seconds it took.
-  Result<double> Compute(const Job& job, const RunOptions& on_lane, bool& holds_shot) {
+  Result<double> Compute(std::size_t k, const RunOptions& on_lane, bool& holds_shot) {
+    const Job& job = jobs[k];
     const auto t0 = std::chrono::steady_clock::now();
     if (!job.external) {
-      std::lock_guard<std::mutex> lock(reference_locks.at(ReferenceId(job)));
+      std::lock_guard<std::mutex> lock(reference_locks.at(reference_of[k]));
       Status reference = EnsureReference(job, on_lane);
-      Release(job, holds_shot, bool(reference));
+      Release(k, holds_shot, bool(reference));
       if (!reference) return reference.failure();
     }
     auto measured = MeasureJob(job, on_lane);
@@ -456,27 +458,27 @@ struct JobWorkers {
     std::size_t pick = first_unclaimed;
     for (std::size_t k = first_unclaimed; k < jobs.size(); ++k) {
       if (claimed[k]) continue;
-      if (jobs[k].external || !rendering.count(ReferenceId(jobs[k]))) {
+      if (jobs[k].external || !rendering.count(reference_of[k])) {
         pick = k;
         break;
       }
     }
     claimed[pick] = true;
     Claimed c{pick, false};
-    if (!jobs[pick].external) {
-      const std::string reference = ReferenceId(jobs[pick]);
-      if (!rendered.count(reference)) ++rendering[reference], c.holds_shot = true;
+    if (!jobs[pick].external && !rendered.count(reference_of[pick])) {
+      ++rendering[reference_of[pick]];
+      c.holds_shot = true;
     }
     return c;
   }
 
   // The claimed job no longer holds its shot back: its reference is on disk
   // (`ready`), failed, or the job was found done.
-  void Release(const Job& job, bool& holds_shot, bool ready) {
+  void Release(std::size_t k, bool& holds_shot, bool ready) {
     if (!holds_shot) return;
     holds_shot = false;
     std::lock_guard<std::mutex> lock(mutex);
-    const std::string reference = ReferenceId(job);
+    const std::string& reference = reference_of[k];
     if (ready) rendered.insert(reference);
     if (auto it = rendering.find(reference); it != rendering.end() && --it->second <= 0) rendering.erase(it);
   }
@@ -519,11 +521,11 @@ struct JobWorkers {
           if (done && *done) ++summary.rekeyed;
         }
       }
-      if (!done || *done) Release(job, claim->holds_shot, false);
+      if (!done || *done) Release(claim->index, claim->holds_shot, false);
       if (!done) return Stop(who, done.failure());
       double seconds = 0;
       if (!*done) {
-        auto computed = Compute(job, on_lane, claim->holds_shot);
+        auto computed = Compute(claim->index, on_lane, claim->holds_shot);
         if (!computed) return Stop(who, computed.failure());
         seconds = *computed;
       }
@@ -573,8 +575,9 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
   std::unique_ptr<ResultStore> store = std::move(*opened);
   // One lock per shared reference, so two workers never render the same one.
   std::map<std::string, std::mutex> reference_locks;
-  for (const Job& job : jobs)
-    if (!job.external) reference_locks[ReferenceId(job)];
+  std::vector<std::string> reference_of(jobs.size());
+  for (std::size_t k = 0; k < jobs.size(); ++k)
+    if (!jobs[k].external) reference_locks[reference_of[k] = ReferenceId(jobs[k])];
   // The ETA counts the jobs left to compute, not those the store has.
   const auto counted = JobsToCompute(jobs, *store);
   if (!counted) {
@@ -583,7 +586,7 @@ RunSummary RunJobs(const std::vector<Job>& all_jobs, const RunOptions& options) 
   }
   RunProgress progress;
   progress.total = summary.total;
-  JobWorkers workers{jobs, options, *store, summary, progress, reference_locks, *counted,
+  JobWorkers workers{jobs, options, *store, summary, progress, reference_locks, reference_of, *counted,
                      std::chrono::steady_clock::now()};
   std::vector<std::thread> threads;
   for (int i = 1; i < std::max(1, options.jobs); ++i) threads.emplace_back([&workers, i] { workers.Work(i); });

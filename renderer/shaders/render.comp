@@ -233,7 +233,13 @@ SampleSums addSample(SampleSums a, SurfaceSample s, Ray ray, Light light, Materi
   return a;
 }
 
-void main() {
+// Where this invocation sits: its pixel and its lane in the 2x2 quad.
+struct PixelLane {
+  ivec2 px;
+  uint lane;
+};
+
+PixelLane pixelLane() {
   uint lin = gl_SubgroupID * gl_SubgroupSize + gl_SubgroupInvocationID;
   uint quad = lin >> 2u;
   uint lane = lin & 3u;
@@ -241,16 +247,19 @@ void main() {
   // are the same as in one dispatch over the whole image.
   ivec2 px = ivec2(gl_WorkGroupID.xy) * 8 + ivec2(0, frame.size.z) +
              ivec2(int((quad & 3u) * 2u + (lane & 1u)), int((quad >> 2u) * 2u + (lane >> 1u)));
-  bool inside = px.x < frame.size.x && px.y < frame.size.y;
-  int idx = (px.y - frame.size.z) * frame.size.x + px.x;
+  return PixelLane(px, lane);
+}
 
-  Camera c = loadCamera(frame.cam);
-  Camera prev = loadCamera(frame.prevCam);
+Light frameLight() {
   Light light;
   light.type = int(frame.lightA.w);
   light.vec = frame.lightA.xyz;
   light.radiance = frame.lightB.xyz;
   light.radius = frame.lightB.w;
+  return light;
+}
+
+Material frameMaterial() {
   Material m;
   m.ndf = MATERIAL_NDF;
   m.alpha = frame.matA.xy;
@@ -258,103 +267,92 @@ void main() {
   m.albedo = frame.matAlbedo.xyz;
   m.glintAlphaL = frame.matA.z;
   m.glintDensity = frame.matA.w;
-  VariantParams vp;
-  VARIANT_PARAMS_FROM_SLOTS(vp, pc.params, pc.params2);
+  return m;
+}
 
-  if (SPP_N == 1) {
-    // Pixels past the image edge still run: they are the quad's helper lanes.
-    Ray ray = cameraRay(c, pixelCentre(px));
-    SurfaceSample s = traceRay(ray, light);
-    if ((SCENE_FEATURES & SCENE_ROUGHNESS_MAPS) != 0) m = materialAt(m, s);
-    ShadingFootprint f;
-    // A normal-map filter reads the map with the pixel's uv footprint and
-    // differences the normals it filtered (renderPixelOracle in pixel.glsl).
-    NormalMapFilter nf = levelZeroFilter();
-    FilteredCentre fc;
-    // A glint material's texture-space footprint (glints.glsl).
-    GlintFootprint gf;
-    if (DERIV_MODE == DERIV_ANALYTIC) {
-      if (NM_FILTER != NMF_NONE) {
-        nf = analyticNormalMapFilter(NM_FILTER, s, ray);
-        fc = filteredCentre(s, c.pos, light, nf, m.alpha, vp.nm_scale);
-        s = fc.s;
-      }
-      f = analyticFootprintFiltered(s, ray, light, nf);
-      if (MATERIAL_NDF == NDF_GLINTS) gf = analyticGlintFootprint(s, ray);
-    } else if (DERIV_MODE == DERIV_QUAD_FINE) {
-      bool right = (lane & 1u) != 0u;
-      bool bottom = (lane & 2u) != 0u;
-      SurfaceSample h = quadNeighbour(s, swapHorizontal(s), c, light, px + ivec2(right ? -1 : 1, 0));
-      SurfaceSample v = quadNeighbour(s, swapVertical(s), c, light, px + ivec2(0, bottom ? -1 : 1));
-      if (NM_FILTER != NMF_NONE) {
-        nf = quadNormalMapFilter(NM_FILTER, s, right ? h : s, right ? s : h, bottom ? v : s, bottom ? s : v);
-        fc = filteredCentre(s, c.pos, light, nf, m.alpha, vp.nm_scale);
-        s = fc.s;
-        h = filteredSample(h, c.pos, light, nf);
-        v = filteredSample(v, c.pos, light, nf);
-      }
-      f = quadFootprint(s, right ? h : s, right ? s : h, bottom ? v : s, bottom ? s : v);
-      if (MATERIAL_NDF == NDF_GLINTS)
-        gf = quadGlintFootprint(s, right ? h : s, right ? s : h, bottom ? v : s, bottom ? s : v);
-    } else {
-      ivec2 q = px - ivec2(int(lane & 1u), int(lane >> 1u));
-      SurfaceSample s0 = quadNeighbour(s, broadcastLane(s, 0u), c, light, q);
-      SurfaceSample s1 = quadNeighbour(s, broadcastLane(s, 1u), c, light, q + ivec2(1, 0));
-      SurfaceSample s2 = quadNeighbour(s, broadcastLane(s, 2u), c, light, q + ivec2(0, 1));
-      if (NM_FILTER != NMF_NONE) {
-        nf = quadNormalMapFilter(NM_FILTER, s, s0, s1, s0, s2);
-        fc = filteredCentre(s, c.pos, light, nf, m.alpha, vp.nm_scale);
-        s = fc.s;
-        s0 = filteredSample(s0, c.pos, light, nf);
-        s1 = filteredSample(s1, c.pos, light, nf);
-        s2 = filteredSample(s2, c.pos, light, nf);
-      }
-      f = quadFootprint(s, s0, s1, s0, s2);
-      if (MATERIAL_NDF == NDF_GLINTS) gf = quadGlintFootprint(s, s0, s1, s0, s2);
-    }
+// The filter variants: one sample at the pixel centre, its footprint from
+// the derivative source. Pixels past the image edge still run: they are the
+// quad's helper lanes.
+void shadePixelCentre(PixelLane pl, bool inside, int idx, Camera c, Camera prev, Light light, Material m,
+                      VariantParams vp) {
+  ivec2 px = pl.px;
+  uint lane = pl.lane;
+  Ray ray = cameraRay(c, pixelCentre(px));
+  SurfaceSample s = traceRay(ray, light);
+  if ((SCENE_FEATURES & SCENE_ROUGHNESS_MAPS) != 0) m = materialAt(m, s);
+  ShadingFootprint f;
+  // A normal-map filter reads the map with the pixel's uv footprint and
+  // differences the normals it filtered (renderPixelOracle in pixel.glsl).
+  NormalMapFilter nf = levelZeroFilter();
+  FilteredCentre fc;
+  // A glint material's texture-space footprint (glints.glsl).
+  GlintFootprint gf;
+  if (DERIV_MODE == DERIV_ANALYTIC) {
     if (NM_FILTER != NMF_NONE) {
-      m.alpha = fc.lobe.alpha;
-      s = turnedSample(s, fc.lobe.angle);
-      f = turnedFootprint(f, fc.lobe.angle);
+      nf = analyticNormalMapFilter(NM_FILTER, s, ray);
+      fc = filteredCentre(s, c.pos, light, nf, m.alpha, vp.nm_scale);
+      s = fc.s;
     }
-    FilteredNdf ndf;
+    f = analyticFootprintFiltered(s, ray, light, nf);
+    if (MATERIAL_NDF == NDF_GLINTS) gf = analyticGlintFootprint(s, ray);
+  } else if (DERIV_MODE == DERIV_QUAD_FINE) {
+    bool right = (lane & 1u) != 0u;
+    bool bottom = (lane & 2u) != 0u;
+    SurfaceSample h = quadNeighbour(s, swapHorizontal(s), c, light, px + ivec2(right ? -1 : 1, 0));
+    SurfaceSample v = quadNeighbour(s, swapVertical(s), c, light, px + ivec2(0, bottom ? -1 : 1));
+    if (NM_FILTER != NMF_NONE) {
+      nf = quadNormalMapFilter(NM_FILTER, s, right ? h : s, right ? s : h, bottom ? v : s, bottom ? s : v);
+      fc = filteredCentre(s, c.pos, light, nf, m.alpha, vp.nm_scale);
+      s = fc.s;
+      h = filteredSample(h, c.pos, light, nf);
+      v = filteredSample(v, c.pos, light, nf);
+    }
+    f = quadFootprint(s, right ? h : s, right ? s : h, bottom ? v : s, bottom ? s : v);
     if (MATERIAL_NDF == NDF_GLINTS)
-      ndf = glintNdfOf(VARIANT_ID, m, s, gf);
-    else
-      ndf = runVariant(m.ndf, m.alpha, f, vp);
-    PixelShade sh = shadeSample(s, f, ndf, m, light, VARIANT_ID, vp, QUADRATURE);
-    if (!inside) return;
-    put3(CH_BEAUTY, idx, sh.specular + sh.diffuse);
-    put3(CH_SPECULAR, idx, sh.specular);
-    put3(CH_DIFFUSE, idx, sh.diffuse);
-    put(CH_STDERR, idx, 0.0);
-    put(CH_COUNT, idx, 1.0);
-    put(CH_M2, idx, 0.0);
-    writeAovs(idx, px, s, sh, prev);
-    return;
+      gf = quadGlintFootprint(s, right ? h : s, right ? s : h, bottom ? v : s, bottom ? s : v);
+  } else {
+    ivec2 q = px - ivec2(int(lane & 1u), int(lane >> 1u));
+    SurfaceSample s0 = quadNeighbour(s, broadcastLane(s, 0u), c, light, q);
+    SurfaceSample s1 = quadNeighbour(s, broadcastLane(s, 1u), c, light, q + ivec2(1, 0));
+    SurfaceSample s2 = quadNeighbour(s, broadcastLane(s, 2u), c, light, q + ivec2(0, 1));
+    if (NM_FILTER != NMF_NONE) {
+      nf = quadNormalMapFilter(NM_FILTER, s, s0, s1, s0, s2);
+      fc = filteredCentre(s, c.pos, light, nf, m.alpha, vp.nm_scale);
+      s = fc.s;
+      s0 = filteredSample(s0, c.pos, light, nf);
+      s1 = filteredSample(s1, c.pos, light, nf);
+      s2 = filteredSample(s2, c.pos, light, nf);
+    }
+    f = quadFootprint(s, s0, s1, s0, s2);
+    if (MATERIAL_NDF == NDF_GLINTS) gf = quadGlintFootprint(s, s0, s1, s0, s2);
   }
-
-  // Supersampled: each round is one replicate, a full N x N jittered pattern
-  // (box filter) with its own jitter, merged into the running mean of earlier
-  // rounds. The standard error comes from the spread of the replicates' mean
-  // luminances (Welford over one observation per round): the i.i.d. formula
-  // over all samples ignores the stratification and overstates the error
-  // 2-27x. The count plane holds samples (replicates x N x N).
+  if (NM_FILTER != NMF_NONE) {
+    m.alpha = fc.lobe.alpha;
+    s = turnedSample(s, fc.lobe.angle);
+    f = turnedFootprint(f, fc.lobe.angle);
+  }
+  FilteredNdf ndf;
+  if (MATERIAL_NDF == NDF_GLINTS)
+    ndf = glintNdfOf(VARIANT_ID, m, s, gf);
+  else
+    ndf = runVariant(m.ndf, m.alpha, f, vp);
+  PixelShade sh = shadeSample(s, f, ndf, m, light, VARIANT_ID, vp, QUADRATURE);
   if (!inside) return;
+  put3(CH_BEAUTY, idx, sh.specular + sh.diffuse);
+  put3(CH_SPECULAR, idx, sh.specular);
+  put3(CH_DIFFUSE, idx, sh.diffuse);
+  put(CH_STDERR, idx, 0.0);
+  put(CH_COUNT, idx, 1.0);
+  put(CH_M2, idx, 0.0);
+  writeAovs(idx, px, s, sh, prev);
+}
+
+// One replicate's N x N samples of the pixel. Two loops rather than one with
+// a branch inside: lavapipe runs both sides of a branch for every sample,
+// while a loop whose lanes are all done costs one pass. Almost every pixel
+// has few candidates.
+SampleSums replicateSums(ivec2 px, Camera c, Light light, Material m, VariantParams vp) {
   const int samples = SPP_N * SPP_N;
-  float countA = pc.round.x == 0 ? 0.0 : get(CH_COUNT, idx);
-  float repA = round(countA / float(samples));
-  vec3 specA = repA > 0.0 ? get3(CH_SPECULAR, idx) : vec3(0.0);
-  vec3 diffA = repA > 0.0 ? get3(CH_DIFFUSE, idx) : vec3(0.0);
-  float m2A = repA > 0.0 ? get(CH_M2, idx) : 0.0;
-  float meanYA = luminance(specA + diffA);
-  if (repA >= float(pc.round.z) && pc.target.x > 0.0) {
-    float se = sqrt(m2A / ((repA - 1.0) * repA));
-    if (se <= pc.target.x * max(meanYA, pc.target.y)) return;  // converged
-  }
-  // Two loops rather than one with a branch inside: lavapipe runs both sides
-  // of a branch for every sample, while a loop whose lanes are all done costs
-  // one pass. Almost every pixel has few candidates.
   PixelCandidates candidates = pixelCandidates(pixelCone(c, px));
   bool fewCandidates = candidates.count <= PIXEL_CANDIDATES;
   const uint seed = pixelSeed(px);
@@ -378,6 +376,52 @@ void main() {
     Ray ray = sampleRay(c, px, seed, k);
     sums = addSample(sums, traceRay(ray, light), ray, light, m, vp, lightNumbers(seed, k));
   }
+  return sums;
+}
+
+// Adaptive references stop a whole 8x8 tile at once: a pixel samples on
+// while any pixel of its workgroup is above the tolerance. A pixel's own
+// replicates cannot tell a highlight far smaller than a sample's stratum
+// from darkness (all K replicates miss it: stderr 0); stopping on that spread
+// alone left sparse highlights dark and the frame's energy biased low
+// (GpuReference.AdaptiveAgreesWithAFixedHighSppReferenceOnSparseHighlights).
+// A neighbour that does see the highlight keeps the tile sampling until the
+// highlight's pixels have all agreed. Each pixel reads only its own planes
+// (written in the previous round), so the decision is free of races and the
+// same on every device.
+shared uint tileBusy;
+
+bool tileConverged(bool pixelDone) {
+  if (gl_LocalInvocationIndex == 0u) tileBusy = 0u;
+  barrier();
+  if (!pixelDone) atomicOr(tileBusy, 1u);
+  barrier();
+  return tileBusy == 0u;
+}
+
+// Supersampled: each round is one replicate, a full N x N jittered pattern
+// (box filter) with its own jitter, merged into the running mean of earlier
+// rounds. The standard error comes from the spread of the replicates' mean
+// luminances (Welford over one observation per round): the i.i.d. formula
+// over all samples ignores the stratification and overstates the error
+// 2-27x. The count plane holds samples (replicates x N x N).
+void addReferenceReplicate(ivec2 px, bool inside, int idx, Camera c, Camera prev, Light light, Material m,
+                           VariantParams vp) {
+  const int samples = SPP_N * SPP_N;
+  float countA = !inside || pc.round.x == 0 ? 0.0 : get(CH_COUNT, idx);
+  float repA = round(countA / float(samples));
+  vec3 specA = repA > 0.0 ? get3(CH_SPECULAR, idx) : vec3(0.0);
+  vec3 diffA = repA > 0.0 ? get3(CH_DIFFUSE, idx) : vec3(0.0);
+  float m2A = repA > 0.0 ? get(CH_M2, idx) : 0.0;
+  float meanYA = luminance(specA + diffA);
+  if (pc.target.x > 0.0 && pc.round.x > 0) {
+    bool done = !inside;
+    if (inside && repA >= float(pc.round.z))
+      done = sqrt(m2A / ((repA - 1.0) * repA)) <= pc.target.x * max(meanYA, pc.target.y);
+    if (tileConverged(done)) return;
+  }
+  if (!inside) return;
+  SampleSums sums = replicateSums(px, c, light, m, vp);
   vec3 specB = sums.spec / float(samples);
   vec3 diffB = sums.diff / float(samples);
   float rep = repA + 1.0;
@@ -403,4 +447,18 @@ void main() {
     if ((SCENE_FEATURES & SCENE_ROUGHNESS_MAPS) != 0) m = materialAt(m, s);
     writeAovs(idx, px, s, shadeSample(s, f, sampleNdf(s, f, m, vp), m, light, VARIANT_ID, vp, QUADRATURE), prev);
   }
+}
+
+void main() {
+  PixelLane pl = pixelLane();
+  bool inside = pl.px.x < frame.size.x && pl.px.y < frame.size.y;
+  int idx = (pl.px.y - frame.size.z) * frame.size.x + pl.px.x;
+  Camera c = loadCamera(frame.cam);
+  Camera prev = loadCamera(frame.prevCam);
+  VariantParams vp;
+  VARIANT_PARAMS_FROM_SLOTS(vp, pc.params, pc.params2);
+  if (SPP_N == 1)
+    shadePixelCentre(pl, inside, idx, c, prev, frameLight(), frameMaterial(), vp);
+  else
+    addReferenceReplicate(pl.px, inside, idx, c, prev, frameLight(), frameMaterial(), vp);
 }

@@ -306,6 +306,24 @@ real intersectTriangle(ShearedRay r, vec3 o, vec3 v0, vec3 v1, vec3 v2) {
   return t > RAY_TMIN ? t : real(-1);
 }
 
+// A triangle's corners, the xyz of its three scene words from `word` on.
+struct MeshTriangle {
+  vec3 a;
+  vec3 b;
+  vec3 c;
+};
+
+MeshTriangle meshTriangle(int word) {
+  vec4 w0 = sceneWord(word);
+  vec4 w1 = sceneWord(word + 1);
+  vec4 w2 = sceneWord(word + 2);
+  MeshTriangle t;
+  t.a = vec3(w0.x, w0.y, w0.z);
+  t.b = vec3(w1.x, w1.y, w1.z);
+  t.c = vec3(w2.x, w2.y, w2.z);
+  return t;
+}
+
 struct MeshHit {
   int word;  // the triangle's first word; -1: none
   real t;
@@ -361,10 +379,8 @@ MeshHit traceMesh(int header, vec3 o, vec3 d, real tmax, int best) {
     if (count > 0) {
       for (int k = 0; k < count; k++) {
         int w = firstTri + 3 * (offset + k);
-        vec4 w0 = sceneWord(w);
-        vec4 w1 = sceneWord(w + 1);
-        vec4 w2 = sceneWord(w + 2);
-        real t = intersectTriangle(sr, o, vec3(w0.x, w0.y, w0.z), vec3(w1.x, w1.y, w1.z), vec3(w2.x, w2.y, w2.z));
+        MeshTriangle tri = meshTriangle(w);
+        real t = intersectTriangle(sr, o, tri.a, tri.b, tri.c);
         // Equal t: the lower word, so the answer does not depend on the order of the walk.
         if (t > real(0) && (t < h.t || (t == h.t && w < h.word))) {
           h.t = t;
@@ -500,19 +516,17 @@ PixelCone pixelCone(Camera c, ivec2 px) {
   PixelCone k;
   k.o = c.pos;
   k.axis = cameraRay(c, base + vec2(real(0.5), real(0.5))).d;
-  real cosA = dot(k.axis, cameraRay(c, base).d);
-  cosA = min(cosA, dot(k.axis, cameraRay(c, base + vec2(real(1), real(0))).d));
-  cosA = min(cosA, dot(k.axis, cameraRay(c, base + vec2(real(0), real(1))).d));
-  cosA = min(cosA, dot(k.axis, cameraRay(c, base + vec2(real(1), real(1))).d));
+  // The corner rays' unit directions, for the cone and the mesh pyramid.
+  vec3 d00 = cameraRay(c, base).d;
+  vec3 d10 = cameraRay(c, base + vec2(real(1), real(0))).d;
+  vec3 d01 = cameraRay(c, base + vec2(real(0), real(1))).d;
+  vec3 d11 = cameraRay(c, base + vec2(real(1), real(1))).d;
+  real cosA = min(min(dot(k.axis, d00), dot(k.axis, d10)), min(dot(k.axis, d01), dot(k.axis, d11)));
   // Widen by 1e-3 relative plus an absolute floor: rounding in the corner
   // rays must never drop a primitive a sample ray hits.
   k.sinA = min(sqrt(max(real(1) - cosA * cosA, real(0))) * real(1.001) + real(1e-5), real(1));
   k.cosA = sqrt(real(1) - k.sinA * k.sinA);
 #ifdef SHIMMER_MESHES
-  vec3 d00 = cameraRay(c, base).d;
-  vec3 d10 = cameraRay(c, base + vec2(real(1), real(0))).d;
-  vec3 d11 = cameraRay(c, base + vec2(real(1), real(1))).d;
-  vec3 d01 = cameraRay(c, base + vec2(real(0), real(1))).d;
   k.side0 = pyramidSide(d00, d10, k.axis);
   k.side1 = pyramidSide(d10, d11, k.axis);
   k.side2 = pyramidSide(d11, d01, k.axis);
@@ -672,11 +686,8 @@ PixelCandidates withMeshCandidates(PixelCandidates l, PixelCone k, int header) {
       if (count > 0) {
         for (int i = 0; i < count; i++) {
           int w = firstTri + 3 * (offset + i);
-          vec4 w0 = sceneWord(w);
-          vec4 w1 = sceneWord(w + 1);
-          vec4 w2 = sceneWord(w + 2);
-          if (!triangleOutsidePyramid(k, vec3(w0.x, w0.y, w0.z), vec3(w1.x, w1.y, w1.z), vec3(w2.x, w2.y, w2.z)))
-            l = withCandidate(l, w);
+          MeshTriangle tri = meshTriangle(w);
+          if (!triangleOutsidePyramid(k, tri.a, tri.b, tri.c)) l = withCandidate(l, w);
         }
       } else {
         next = node + 1;

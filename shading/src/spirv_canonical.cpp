@@ -172,12 +172,21 @@ Result<std::vector<Instruction>> CanonicalInstructions(const Spirv& module) {
   // only inlining them into main and propagating the frozen constants shows
   // which code this kernel runs. Source lines (OpLine) sit inside function
   // bodies: they go too.
+  // Scalar replacement splits the structs that inlining leaves as function
+  // locals (a struct argument, a struct a helper returns) into one variable
+  // per field, which the store eliminations then turn into SSA values, and
+  // simplification folds the composite constructs and extracts left around
+  // them: so moving code into a helper that takes or returns a struct keeps
+  // the kernel's hash, as it keeps its arithmetic.
   optimizer.RegisterPass(spvtools::CreateMergeReturnPass())
       .RegisterPass(spvtools::CreateInlineExhaustivePass())
       .RegisterPass(spvtools::CreateEliminateDeadFunctionsPass())
+      .RegisterPass(spvtools::CreatePrivateToLocalPass())
+      .RegisterPass(spvtools::CreateScalarReplacementPass(0))
       .RegisterPass(spvtools::CreateLocalSingleStoreElimPass())
       .RegisterPass(spvtools::CreateLocalMultiStoreElimPass())
       .RegisterPass(spvtools::CreateCCPPass())
+      .RegisterPass(spvtools::CreateSimplificationPass())
       .RegisterPass(spvtools::CreateDeadBranchElimPass())
       .RegisterPass(spvtools::CreateAggressiveDCEPass())
       .RegisterPass(spvtools::CreateStripDebugInfoPass())
@@ -231,7 +240,7 @@ bool MemoryStorage(std::uint32_t storage_class) {
 }  // namespace
 
 // Bump when the passes or the structural hash change.
-std::string CanonicalHashVersion() { return "structural-1 " + SpecializerVersion(); }
+std::string CanonicalHashVersion() { return "structural-2 " + SpecializerVersion(); }
 
 namespace {
 

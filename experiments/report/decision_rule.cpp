@@ -74,8 +74,6 @@ namespace {
 
 // Same draws (region, frames, seed) and the same reference: an external
 // sequence measured against its own reference does not pair with shimmer's rows.
-constexpr double kZ95 = 1.959963984540054;  // the normal's two-sided 95 % quantile
-
 bool Pair(const Evidence& a, const Evidence& b) {
   return a.draws && b.draws && a.draws->key == b.draws->key && a.reference_id == b.reference_id;
 }
@@ -87,9 +85,11 @@ std::optional<PairedComparison> Paired(double a, const metrics::Replicates& ra, 
   if (!ci) return std::nullopt;
   PairedComparison out;
   out.difference = a - b;
-  const double noise = kZ95 * (std::isnan(sigma) ? 0.0 : sigma);
-  out.ci.lo = out.difference - std::hypot(out.difference - ci->lo, noise);
-  out.ci.hi = out.difference + std::hypot(ci->hi - out.difference, noise);
+  const double noise_sigma = std::isnan(sigma) ? 0.0 : sigma;
+  const metrics::Interval widened = metrics::WidenedInQuadrature(out.difference, *ci, noise_sigma);
+  out.ci.lo = widened.lo;
+  out.ci.hi = widened.hi;
+  const double noise = metrics::kZ95 * noise_sigma;
   const double half = 0.5 * (out.ci.hi - out.ci.lo);
   out.noise_share = half > 0 ? noise / half : (noise > 0 ? 1.0 : 0.0);
   return out;

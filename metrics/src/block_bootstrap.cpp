@@ -114,6 +114,11 @@ std::optional<BootstrapDraws> DecodeDraws(std::string_view bytes) {
   return draws;
 }
 
+Interval WidenedInQuadrature(double value, Interval interval, double sigma) {
+  const double half = kZ95 * sigma;
+  return Interval{value - std::hypot(value - interval.lo, half), value + std::hypot(interval.hi - value, half)};
+}
+
 std::optional<Interval> PairedDifference(double a, const Replicates& ra, double b, const Replicates& rb) {
   const size_t n = ra.joint.size();
   if (n < 2 || rb.joint.size() != n || ra.tiles_only.size() != n || rb.tiles_only.size() != n ||

@@ -19,15 +19,26 @@ using detail::kRelMseEpsilon;
 // Per (frame block, region pixel): the sums TileBlockStatistics::CellSum names.
 constexpr int kCellSums = TileBlockStatistics::kCellSums;
 
-// The two-sided 95 % normal quantile, for the reference noise's share of an interval.
-constexpr double kZ95 = 1.959963984540054;
-
 // Per-row partial sums of one frame: rows are the unit of parallel work, so
 // summing them in row order afterwards keeps results independent of threading.
 struct RowSums {
   double test = 0, reference = 0, error2 = 0, relative2 = 0;
   long long samples = 0, non_finite = 0;
 };
+
+// In row order, as always: the sums' last bits depend on it.
+RowSums SumOfRows(const std::vector<RowSums>& rows) {
+  RowSums frame;
+  for (const RowSums& r : rows) {
+    frame.test += r.test;
+    frame.reference += r.reference;
+    frame.error2 += r.error2;
+    frame.relative2 += r.relative2;
+    frame.samples += r.samples;
+    frame.non_finite += r.non_finite;
+  }
+  return frame;
+}
 
 double MeanOver(const cv::Mat& map, const cv::Mat& mask, long long count) {
   double sum = 0;
@@ -95,27 +106,69 @@ MetricsAccumulator::MetricsAccumulator(const AccumulatorSetup& setup)
   }
 }
 
+MetricsAccumulator::SparkleTracks MetricsAccumulator::TracksOf(const cv::Mat& motion, const cv::Mat& reference_motion) {
+  // Each side follows its own motion vectors, else the other side's, else none.
+  for (const cv::Mat* m : {&motion, &reference_motion})
+    CV_Assert(m->empty() || (m->type() == CV_32FC2 && m->rows == setup_.height && m->cols == setup_.width));
+  const cv::Mat* own_ref = setup_.has_reference && !reference_motion.empty() ? &reference_motion : nullptr;
+  const cv::Mat* own_test = !motion.empty() ? &motion : nullptr;
+  SparkleTracks tracks{own_test ? own_test : own_ref, own_ref ? own_ref : own_test};
+  if (frames_added_ == 1) {
+    auto whose = [&](const cv::Mat* m) { return !m ? "none" : m == &motion ? "test" : "reference"; };
+    sparkle_motion_test_ = whose(tracks.test);
+    sparkle_motion_ref_ = whose(tracks.reference);
+  }
+  return tracks;
+}
+
+// The bootstrap cells, relMSE's joint sums and the reference noise's sums of
+// row y's updated pixels (with a reference).
+void MetricsAccumulator::AddCellRow(int y, const float* tv_row, const float* rv_row, const float* se_row,
+                                    const detail::PixelRowTerms& terms, float* block_cells) {
+  const size_t row = static_cast<size_t>(y) * setup_.width;
+  for (int x = 0; x < setup_.width; ++x) {
+    if (!terms.updated[x]) continue;
+    const size_t i = row + x;
+    const double tv = tv_row[x], rv = rv_row[x];
+    const double e = tv - rv;
+    const int p = region_index_[i];
+    if (frames_added_ == 0) {
+      shifts_[2 * p] = static_cast<float>(tv);
+      shifts_[2 * p + 1] = static_cast<float>(rv);
+    }
+    const double dt = tv - shifts_[2 * p], dr = rv - shifts_[2 * p + 1], de = dt - dr;
+    const double denominator = rv * rv + kRelMseEpsilon;
+    const double w = 1 / denominator;
+    using S = TileBlockStatistics;
+    float* cell = block_cells + static_cast<size_t>(p) * kCellSums;
+    cell[S::kSumT] += static_cast<float>(dt);
+    cell[S::kSumR] += static_cast<float>(dr);
+    cell[S::kSquareT] += static_cast<float>(dt * dt);
+    cell[S::kSquareR] += static_cast<float>(dr * dr);
+    cell[S::kSquareE] += static_cast<float>(de * de);
+    cell[S::kRelative] += static_cast<float>(terms.relative2[x]);  // e^2 / denominator
+    cell[S::kWeight] += static_cast<float>(w);
+    cell[S::kWeightedE] += static_cast<float>(w * de);
+    cell[S::kWeightedE2] += static_cast<float>(w * de * de);
+    double* joint = joint_.data() + 3 * static_cast<size_t>(p);
+    joint[0] += w, joint[1] += w * e, joint[2] += w * e * e;
+    if (se_row && std::isfinite(se_row[x])) {
+      const double s2 = double(se_row[x]) * se_row[x];
+      noise_[p] += s2;
+      weighted_noise_[p] += w * s2;
+      // d/dR of E^2 / (R^2 + eps), with E = T - R (the delta method).
+      const double slope = -2 * e / denominator - 2 * rv * e * e / (denominator * denominator);
+      relmse_noise_[p] += slope * slope * s2;
+    }
+  }
+}
+
 void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv::Mat& motion,
                                   const std::string& test_source, const std::string& reference_source,
                                   const cv::Mat& reference_stderr, const cv::Mat& reference_motion) {
   const bool has_ref = setup_.has_reference;
-  // Sparkles: each side follows its own motion vectors, else the other side's, else none.
   const bool sparkles = sparkle_test_.active();
-  const cv::Mat* test_track = nullptr;
-  const cv::Mat* ref_track = nullptr;
-  if (sparkles) {
-    for (const cv::Mat* m : {&motion, &reference_motion})
-      CV_Assert(m->empty() || (m->type() == CV_32FC2 && m->rows == setup_.height && m->cols == setup_.width));
-    const cv::Mat* own_ref = has_ref && !reference_motion.empty() ? &reference_motion : nullptr;
-    const cv::Mat* own_test = !motion.empty() ? &motion : nullptr;
-    test_track = own_test ? own_test : own_ref;
-    ref_track = own_ref ? own_ref : own_test;
-    if (frames_added_ == 1) {
-      auto whose = [&](const cv::Mat* m) { return !m ? "none" : m == &motion ? "test" : "reference"; };
-      sparkle_motion_test_ = whose(test_track);
-      sparkle_motion_ref_ = whose(ref_track);
-    }
-  }
+  const SparkleTracks tracks = sparkles ? TracksOf(motion, reference_motion) : SparkleTracks{};
   const bool with_stderr = has_ref && setup_.reference_stderr && !reference_stderr.empty();
   if (with_stderr) ++stderr_frames_;
   const size_t region_count = region_indices_.size();
@@ -164,58 +217,14 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
       sums.non_finite = terms.non_finite;
       rows[y] = sums;
       if (sparkles) {
-        sparkle_test_.AddRow(y, tv_row, in.region, test_track ? test_track->ptr<cv::Vec2f>(y) : nullptr);
-        if (has_ref) sparkle_ref_.AddRow(y, rv_row, in.region, ref_track ? ref_track->ptr<cv::Vec2f>(y) : nullptr);
+        sparkle_test_.AddRow(y, tv_row, in.region, tracks.test ? tracks.test->ptr<cv::Vec2f>(y) : nullptr);
+        if (has_ref) sparkle_ref_.AddRow(y, rv_row, in.region, tracks.reference ? tracks.reference->ptr<cv::Vec2f>(y) : nullptr);
       }
-      if (!has_ref) continue;
-      const float* se_row = with_stderr ? reference_stderr.ptr<float>(y) : nullptr;
-      for (int x = 0; x < width; ++x) {
-        if (!updated[x]) continue;
-        const size_t i = row + x;
-        const double tv = tv_row[x], rv = rv_row[x];
-        const double e = tv - rv;
-        const int p = region_index_[i];
-        if (frames_added_ == 0) {
-          shifts_[2 * p] = static_cast<float>(tv);
-          shifts_[2 * p + 1] = static_cast<float>(rv);
-        }
-        const double dt = tv - shifts_[2 * p], dr = rv - shifts_[2 * p + 1], de = dt - dr;
-        const double denominator = rv * rv + kRelMseEpsilon;
-        const double w = 1 / denominator;
-        using S = TileBlockStatistics;
-        float* cell = block_cells + static_cast<size_t>(p) * kCellSums;
-        cell[S::kSumT] += static_cast<float>(dt);
-        cell[S::kSumR] += static_cast<float>(dr);
-        cell[S::kSquareT] += static_cast<float>(dt * dt);
-        cell[S::kSquareR] += static_cast<float>(dr * dr);
-        cell[S::kSquareE] += static_cast<float>(de * de);
-        cell[S::kRelative] += static_cast<float>(terms.relative2[x]);  // e^2 / denominator
-        cell[S::kWeight] += static_cast<float>(w);
-        cell[S::kWeightedE] += static_cast<float>(w * de);
-        cell[S::kWeightedE2] += static_cast<float>(w * de * de);
-        double* joint = joint_.data() + 3 * static_cast<size_t>(p);
-        joint[0] += w, joint[1] += w * e, joint[2] += w * e * e;
-        if (se_row && std::isfinite(se_row[x])) {
-          const double s2 = double(se_row[x]) * se_row[x];
-          noise_[p] += s2;
-          weighted_noise_[p] += w * s2;
-          // d/dR of E^2 / (R^2 + eps), with E = T - R (the delta method).
-          const double slope = -2 * e / denominator - 2 * rv * e * e / (denominator * denominator);
-          relmse_noise_[p] += slope * slope * s2;
-        }
-      }
+      if (has_ref) AddCellRow(y, tv_row, rv_row, with_stderr ? reference_stderr.ptr<float>(y) : nullptr, terms, block_cells);
     }
   });
 
-  RowSums frame;
-  for (const RowSums& r : rows) {
-    frame.test += r.test;
-    frame.reference += r.reference;
-    frame.error2 += r.error2;
-    frame.relative2 += r.relative2;
-    frame.samples += r.samples;
-    frame.non_finite += r.non_finite;
-  }
+  const RowSums frame = SumOfRows(rows);
   if (frame.non_finite > 0) {
     nan_samples_ += frame.non_finite;
     if (first_non_finite_.empty()) first_non_finite_ = !has_ref || !cv::checkRange(T) ? test_source : reference_source;
@@ -295,10 +304,7 @@ void MetricsAccumulator::AddIntervals(MetricsReport* report, const cv::Mat& good
     report->ref_noise = floor;
     // Noise of a sum in quadrature with the bootstrap's half-widths.
     auto widen = [](std::optional<Interval>& interval, double value, double sigma) {
-      if (!interval) return;
-      const double half = kZ95 * sigma;
-      interval->lo = value - std::hypot(value - interval->lo, half);
-      interval->hi = value + std::hypot(interval->hi - value, half);
+      if (interval) interval = WidenedInQuadrature(value, *interval, sigma);
     };
     if (ci.tv_err) ci.tv_err->lo = std::max(0.0, ci.tv_err->lo - floor);
     if (ci.tv_ratio && report->tv_ref && *report->tv_ref > floor)

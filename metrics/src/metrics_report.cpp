@@ -23,131 +23,123 @@ std::string SizeText(int w, int h) { return std::to_string(w) + "x" + std::to_st
 
 }  // namespace
 
-Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameObserver& observer) {
-  using R = Result<MetricsReport>;
-  if (!(options.sparkle_threshold >= 0) || !std::isfinite(options.sparkle_threshold)) {
-    char given[32];
-    std::snprintf(given, sizeof given, "%g", options.sparkle_threshold);
-    return R::Failure(std::string("sparkle_threshold must be a finite number >= 0 (0: no sparkle statistics), got ") +
-                      given);
-  }
+namespace {
+
+// The test sequence and, with options.reference, the reference, checked to
+// match in size and frame count.
+struct OpenedSequences {
+  ExrSequence test;
+  std::optional<ExrSequence> reference;
+};
+
+Result<OpenedSequences> OpenSequences(const MetricsOptions& options) {
+  using R = Result<OpenedSequences>;
   auto test = OpenSequence(options.test, options.request);
   if (!test) return R::Failure(test.error());
-  std::optional<ExrSequence> reference;
-  MetricsReport report;
-  report.warnings = test->warnings;
+  OpenedSequences opened{std::move(*test), std::nullopt};
+  ExrSequence& t = opened.test;
   if (options.reference) {
     // The reference is read in the layer chosen for the test, so that both
     // sides always measure the same quantity.
     SequenceRequest request = options.request;
-    request.layer = test->layer;
+    request.layer = t.layer;
     auto ref = OpenSequence(*options.reference, request);
     if (!ref) return R::Failure(ref.error());
-    if (ref->width != test->width || ref->height != test->height)
-      return R::Failure("TEST " + options.test.string() + " is " + SizeText(test->width, test->height) + " but REF " +
+    if (ref->width != t.width || ref->height != t.height)
+      return R::Failure("TEST " + options.test.string() + " is " + SizeText(t.width, t.height) + " but REF " +
                         options.reference->string() + " is " + SizeText(ref->width, ref->height));
-    if (ref->frames.size() != test->frames.size())
-      return R::Failure("TEST " + options.test.string() + " has " + std::to_string(test->frames.size()) +
+    if (ref->frames.size() != t.frames.size())
+      return R::Failure("TEST " + options.test.string() + " has " + std::to_string(t.frames.size()) +
                         " frames but REF " + options.reference->string() + " has " +
                         std::to_string(ref->frames.size()));
-    if (test->fps_source != "sequence.json" && ref->fps_source == "sequence.json") {
-      test->fps = ref->fps;
-      test->fps_source = "sequence.json";
+    if (t.fps_source != "sequence.json" && ref->fps_source == "sequence.json") {
+      t.fps = ref->fps;
+      t.fps_source = "sequence.json";
     }
-    reference = std::move(*ref);
+    opened.reference = std::move(*ref);
   }
-  const bool has_ref = reference.has_value();
-  const int frames = static_cast<int>(test->frames.size());
-  const int width = test->width, height = test->height;
+  const int frames = static_cast<int>(t.frames.size());
   if (frames < 2)
     return R::Failure(options.test.string() + ": " + std::to_string(frames) +
                       " frame; temporal metrics need at least 2");
+  return opened;
+}
 
-  const bool sparkles = options.sparkle_threshold > 0;
-  // The reference's own motion vectors are read only for the sparkle lifetimes.
-  const bool reference_motion = sparkles && has_ref && reference->has_motion;
-
-  const FlickerSignal signal = options.signal.value_or(has_ref ? FlickerSignal::kError : FlickerSignal::kTest);
-  if (signal == FlickerSignal::kError && !has_ref) return R::Failure("--signal error needs a reference sequence (REF)");
-  const int segment_length =
-      options.segment_length > 0 ? options.segment_length : std::min(frames, kDefaultSegmentLength);
-  if (segment_length < 2 || segment_length > frames)
-    return R::Failure("--segment " + std::to_string(segment_length) + " must be between 2 and the frame count (" +
-                      std::to_string(frames) + ")");
-  // What the pass holds per pixel: three pairs of moments and two difference
-  // maps in double, the spectrum's L-frame ring in float, and two frame pairs
-  // with motion being read and computed. Refused up front, with the numbers,
-  // rather than found by the OOM killer on a huge sequence.
-  // With a reference, the bootstrap's six float sums per frame block, the
-  // first-frame shifts, and stderr.Y's two sums and its plane. With sparkle
-  // statistics, two int32 age planes per sequence and the reference's motion.
-  const int frame_blocks = (frames + FrameBlockLength(frames) - 1) / FrameBlockLength(frames);
-  const double bytes_per_pixel = 3 * 16 + 2 * 8 + 4.0 * segment_length + 2 * (2 * 4 + 8) + 8 +
+// What the pass holds per pixel: three pairs of moments and two difference
+// maps in double, the spectrum's L-frame ring in float, and two frame pairs
+// with motion being read and computed. Refused up front, with the numbers,
+// rather than found by the OOM killer on a huge sequence.
+// With a reference, the bootstrap's six float sums per frame block, the
+// first-frame shifts, and stderr.Y's two sums and its plane. With sparkle
+// statistics, two int32 age planes per sequence and the reference's motion.
+Status CheckMemory(const MetricsOptions& options, const AccumulatorSetup& setup, bool reference_motion) {
+  const bool has_ref = setup.has_reference, sparkles = setup.sparkle_threshold > 0;
+  const int frame_blocks = (setup.frames + FrameBlockLength(setup.frames) - 1) / FrameBlockLength(setup.frames);
+  const double bytes_per_pixel = 3 * 16 + 2 * 8 + 4.0 * setup.segment_length + 2 * (2 * 4 + 8) + 8 +
                                  (has_ref ? 24.0 * frame_blocks + 8 + 16 + 2 * 4 : 0.0) +
                                  (sparkles ? 8.0 * (has_ref ? 2 : 1) + (reference_motion ? 2 * 8 : 0) : 0.0);
-  const double needed = bytes_per_pixel * double(width) * double(height);
+  const double needed = bytes_per_pixel * double(setup.width) * double(setup.height);
   if (const double available = double(AvailableHostMemory()); available > 0 && needed > available) {
     char text[256];
     std::snprintf(text, sizeof text,
                   "%s: measuring %dx%d frames needs about %.1f GiB of memory (with --segment %d); %.1f GiB are "
                   "available",
-                  options.test.string().c_str(), width, height, needed / (1 << 30), segment_length,
-                  available / (1 << 30));
-    return R::Failure(text, ErrorCode::kOutOfMemory);
+                  options.test.string().c_str(), setup.width, setup.height, needed / (1 << 30),
+                  setup.segment_length, available / (1 << 30));
+    return Status::Failure(text, ErrorCode::kOutOfMemory);
   }
+  return Ok();
+}
 
-  // The region M.
+// The region M: the mask file, the highlight mask or the whole frame; its
+// name goes into report->region.
+Result<cv::Mat> MeasuredRegion(const MetricsOptions& options, const OpenedSequences& seq, MetricsReport* report) {
+  using R = Result<cv::Mat>;
+  const int width = seq.test.width, height = seq.test.height;
   cv::Mat region;
   if (options.mask_file) {
     auto mask = ReadMask(*options.mask_file, width, height);
     if (!mask) return R::Failure(mask.error());
     region = *mask;
-    report.region = "mask:" + options.mask_file->string();
+    report->region = "mask:" + options.mask_file->string();
   } else if (options.highlight_mask) {
-    auto mask = BuildHighlightMask(has_ref ? *reference : *test, options.highlight);
+    auto mask = BuildHighlightMask(seq.reference ? *seq.reference : seq.test, options.highlight);
     if (!mask) return R::Failure(mask.error());
     region = *mask;
-    report.region = "highlight";
+    report->region = "highlight";
     if (cv::countNonZero(region) == 0 && options.highlight.empty_falls_back_to_frame) {
       region = cv::Mat::ones(height, width, CV_8U);
-      report.region = "frame (highlight mask empty)";
+      report->region = "frame (highlight mask empty)";
     }
   } else {
     region = cv::Mat::ones(height, width, CV_8U);
-    report.region = "frame";
+    report->region = "frame";
   }
-  const long long region_pixels = cv::countNonZero(region);
-  if (region_pixels == 0)
+  if (cv::countNonZero(region) == 0)
     return R::Failure(options.highlight_mask
                           ? "the highlight mask is empty: no pixel's specular luminance exceeds " +
                                 std::to_string(options.highlight.threshold) + " (lower --highlight-threshold)"
                           : "the mask " + options.mask_file->string() + " has no nonzero pixel");
+  return region;
+}
 
-  AccumulatorSetup setup;
-  setup.width = width;
-  setup.height = height;
-  setup.frames = frames;
-  setup.fps = test->fps;
-  setup.has_reference = has_ref;
-  setup.with_motion = test->has_motion;
-  setup.region = region;
-  setup.signal = signal;
-  setup.segment_length = segment_length;
-  setup.reference_stderr = has_ref && reference->has_stderr;
-  setup.sparkle_threshold = options.sparkle_threshold;
-  MetricsAccumulator accumulator(setup);
-
-  // The next frame pair is read (its chunks decoded in parallel) while this
-  // one is computed. Both run as tasks of the one TBB pool that OpenCV's
-  // parallel_for_ uses too: a separate reader thread would oversubscribe the
-  // cores (measured 15 % slower on 2 cores than not overlapping at all).
+// Every frame pair into the accumulator, in order. The next pair is read
+// (its chunks decoded in parallel) while this one is computed. Both run as
+// tasks of the one TBB pool that OpenCV's parallel_for_ uses too: a separate
+// reader thread would oversubscribe the cores (measured 15 % slower on 2
+// cores than not overlapping at all).
+Status AccumulateFrames(const OpenedSequences& seq, const AccumulatorSetup& setup, bool reference_motion,
+                        const FrameObserver& observer, MetricsAccumulator* accumulator) {
+  const ExrSequence& test = seq.test;
+  const bool has_ref = setup.has_reference;
+  const int frames = setup.frames, width = setup.width, height = setup.height;
   auto read = [&](int t) -> Result<FramePair> {
     FramePair pair;
-    auto tf = ReadFrame(test->frames[t], test->layer, width, height, setup.with_motion);
+    auto tf = ReadFrame(test.frames[t], test.layer, width, height, setup.with_motion);
     if (!tf) return tf.failure();
     pair.test = std::move(*tf);
     if (has_ref) {
-      auto rf = ReadFrame(reference->frames[t], reference->layer, width, height, reference_motion,
+      auto rf = ReadFrame(seq.reference->frames[t], seq.reference->layer, width, height, reference_motion,
                           setup.reference_stderr);
       if (!rf) return rf.failure();
       pair.reference = std::move(*rf);
@@ -169,24 +161,71 @@ Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameO
     if (t + 1 < frames) reading.run([&, t] { upcoming = read(t + 1); });
     const cv::Mat& T = current->test.luminance;
     const cv::Mat& Rf = current->reference.luminance;
-    accumulator.AddFrame(T, Rf, current->test.motion, test->frames[t].string(),
-                         has_ref ? reference->frames[t].string() : std::string(), current->reference.stderr_y,
-                         current->reference.motion);
+    accumulator->AddFrame(T, Rf, current->test.motion, test.frames[t].string(),
+                          has_ref ? seq.reference->frames[t].string() : std::string(), current->reference.stderr_y,
+                          current->reference.motion);
     if (observer) {
-      Status s =
-          observer(ObservedFrame{t, test->fps, has_ref, T, has_ref ? Rf : (t > 0 ? previous.test.luminance : T)});
-      if (!s) return s.failure();
+      Status s = observer(ObservedFrame{t, test.fps, has_ref, T, has_ref ? Rf : (t > 0 ? previous.test.luminance : T)});
+      if (!s) return s;
     }
     reading.wait();
     previous = std::move(*current);
     if (upcoming) current = std::move(*upcoming);
   }
+  return Ok();
+}
 
+}  // namespace
+
+Result<MetricsReport> ComputeMetrics(const MetricsOptions& options, const FrameObserver& observer) {
+  using R = Result<MetricsReport>;
+  if (!(options.sparkle_threshold >= 0) || !std::isfinite(options.sparkle_threshold)) {
+    char given[32];
+    std::snprintf(given, sizeof given, "%g", options.sparkle_threshold);
+    return R::Failure(std::string("sparkle_threshold must be a finite number >= 0 (0: no sparkle statistics), got ") +
+                      given);
+  }
+  auto seq = OpenSequences(options);
+  if (!seq) return R::Failure(seq.error());
+  const ExrSequence& test = seq->test;
+  const bool has_ref = seq->reference.has_value();
+  const int frames = static_cast<int>(test.frames.size());
+  MetricsReport report;
+  report.warnings = test.warnings;
+
+  const FlickerSignal signal = options.signal.value_or(has_ref ? FlickerSignal::kError : FlickerSignal::kTest);
+  if (signal == FlickerSignal::kError && !has_ref) return R::Failure("--signal error needs a reference sequence (REF)");
+  const int segment_length =
+      options.segment_length > 0 ? options.segment_length : std::min(frames, kDefaultSegmentLength);
+  if (segment_length < 2 || segment_length > frames)
+    return R::Failure("--segment " + std::to_string(segment_length) + " must be between 2 and the frame count (" +
+                      std::to_string(frames) + ")");
+
+  AccumulatorSetup setup;
+  setup.width = test.width;
+  setup.height = test.height;
+  setup.frames = frames;
+  setup.fps = test.fps;
+  setup.has_reference = has_ref;
+  setup.with_motion = test.has_motion;
+  setup.signal = signal;
+  setup.segment_length = segment_length;
+  setup.reference_stderr = has_ref && seq->reference->has_stderr;
+  setup.sparkle_threshold = options.sparkle_threshold;
+  // The reference's own motion vectors are read only for the sparkle lifetimes.
+  const bool reference_motion = setup.sparkle_threshold > 0 && has_ref && seq->reference->has_motion;
+  if (Status s = CheckMemory(options, setup, reference_motion); !s) return s.failure();
+  auto region = MeasuredRegion(options, *seq, &report);
+  if (!region) return region.failure();
+  setup.region = *region;
+
+  MetricsAccumulator accumulator(setup);
+  if (Status s = AccumulateFrames(*seq, setup, reference_motion, observer, &accumulator); !s) return s.failure();
   report.test = options.test.string();
   if (has_ref) report.reference = options.reference->string();
-  report.layer = test->layer;
-  report.fps = test->fps;
-  report.fps_source = test->fps_source;
+  report.layer = test.layer;
+  report.fps = test.fps;
+  report.fps_source = test.fps_source;
   if (Status s = accumulator.Finish(&report); !s) return s.failure();
   return report;
 }

@@ -25,6 +25,14 @@ struct Interval {
   double lo = 0, hi = 0;
 };
 
+// The normal distribution's two-sided 95 % quantile.
+inline constexpr double kZ95 = 1.959963984540054;
+
+// `interval` about `value` with an independent normal error of standard
+// deviation `sigma` added in quadrature: each side's half-width h becomes
+// sqrt(h^2 + (kZ95 sigma)^2).
+Interval WidenedInQuadrature(double value, Interval interval, double sigma);
+
 // One metric's bootstrap replicates: the joint resample's, and the same
 // draws' tiles alone and blocks alone (the variance correction's).
 struct Replicates {

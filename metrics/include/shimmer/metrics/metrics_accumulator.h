@@ -17,6 +17,10 @@
 
 namespace shimmer::metrics {
 
+namespace detail {
+struct PixelRowTerms;
+}
+
 struct AccumulatorSetup {
   int width = 0, height = 0;
   int frames = 0;  // how many AddFrame calls will come (the spectrum's segments depend on it)
@@ -68,6 +72,15 @@ class MetricsAccumulator {
   std::string first_non_finite_;
   std::vector<double> energy_bias_per_frame_, rmse_per_frame_;
   double relmse_sum_ = 0;
+
+  // Whose motion vectors each side's sparkles follow this frame.
+  struct SparkleTracks {
+    const cv::Mat* test = nullptr;
+    const cv::Mat* reference = nullptr;
+  };
+  SparkleTracks TracksOf(const cv::Mat& motion, const cv::Mat& reference_motion);
+  void AddCellRow(int y, const float* test_row, const float* reference_row, const float* stderr_row,
+                  const detail::PixelRowTerms& terms, float* block_cells);
 
   // The bootstrap's per-pixel, per-frame-block sums (with a reference):
   // kCellSums floats per (block, region pixel), block-major.

@@ -153,6 +153,22 @@ TEST_F(JobIds, CommentsAndDeadCodeInAShaderMoveNothing) {
   EXPECT_TRUE(Moved(base_.job, renamed.job).empty());
 }
 
+TEST_F(JobIds, AHelperThatReadsAStructsFieldsMovesNothing) {
+  // Inlined, the helper's struct argument becomes a local copy read through
+  // field pointers; the canonical form splits it into plain values. Without
+  // the scalar replacement pass this edit moved every filter kernel's hash.
+  std::string text = Replaced(SourceText("render.comp"), "// The filter variants: one sample at the pixel centre,",
+                              "vec3 beautyOf(PixelShade sh) { return sh.specular + sh.diffuse; }\n\n"
+                              "// The filter variants: one sample at the pixel centre,");
+  text = Replaced(text, "put3(CH_BEAUTY, idx, sh.specular + sh.diffuse);\n  put3(CH_SPECULAR, idx, sh.specular);\n"
+                  "  put3(CH_DIFFUSE, idx, sh.diffuse);\n  put(CH_STDERR, idx, 0.0);",
+                  "put3(CH_BEAUTY, idx, beautyOf(sh));\n  put3(CH_SPECULAR, idx, sh.specular);\n"
+                  "  put3(CH_DIFFUSE, idx, sh.diffuse);\n  put(CH_STDERR, idx, 0.0);");
+  const Ids moved = With("render.comp", text);
+  EXPECT_TRUE(Moved(base_.job, moved.job).empty());
+  EXPECT_TRUE(Moved(base_.reference, moved.reference).empty());
+}
+
 TEST_F(JobIds, AnEditOfOneVariantMovesThatVariantsJobsOnly) {
   const Ids edited = With("variants.glsl", Replaced(SourceText("variants.glsl"), "real k = min(sigma2 * spread, kappa);",
                                                     "real k = min(sigma2 * spread, 0.5 * kappa);"));

@@ -142,17 +142,9 @@ std::string TvErrRatioText(const Evidence& e, const Evidence& none) {
                       "%.3g");
 }
 
-void ShotTable(Document& doc, const Group& group, bool has_video) {
-  const std::string slug = Slug(group.key);
-  doc.Heading(3, group.key);
-  const JobResult* none = NoneOf(group);
-  int unresolved = 0;
-  if (none)
-    for (const JobResult* r : group.rows)
-      unresolved += r != none && Decide(EvidenceOf(*r), EvidenceOf(*none)) == Outcome::kUnresolved;
-  const std::string noise =
-      unresolved ? ", but " + std::to_string(unresolved) + " of its rows are **unresolved: reference noise**" : "";
-
+// The shot's reference: its convergence check, and how many rows its noise
+// leaves unresolved (`noise`).
+std::string ReferenceSentence(const Group& group, const std::string& noise) {
   std::string reference;
   switch (ConvergenceOf(group)) {
     case Convergence::kConverged:
@@ -169,6 +161,11 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
                     std::to_string(group.rows.front()->job.reference.spp) + " spp per axis" + noise + ".";
       break;
   }
+  return reference;
+}
+
+// Where and how the rows' costs were timed.
+std::string CostSentence(const Group& group) {
   std::set<std::string> bench_devices;
   const BenchmarkCost* bench = nullptr;
   for (const JobResult* r : group.rows)
@@ -185,6 +182,48 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
            "operations it adds (docs/method.md, Cost).";
   else
     cost = "Cost: each row's ratio to `none` on its own benchmark device (report.csv, column bench_device).";
+  return cost;
+}
+
+// Every other column, for report.html (report.csv has them all too).
+void AllColumnsTable(Document& doc, const Group& group) {
+  const Costs costs = CostsOf(group);
+  std::vector<std::vector<std::string>> all;
+  for (std::size_t i = 0; i < group.rows.size(); ++i) {
+    const JobResult& r = *group.rows[i];
+    const auto& m = r.metrics;
+    all.push_back({Code(Label(r)), Region(r), WithInterval(Metric(m, "tv_err"), Ci95(r, "tv_err")),
+                   WithInterval(Metric(m, "tv_ratio"), Ci95(r, "tv_ratio")),
+                   WithInterval(Metric(m, "relmse_temporal"), Ci95(r, "relmse_temporal")),
+                   WithInterval(Metric(m, "relmse_spatial"), Ci95(r, "relmse_spatial")),
+                   WithInterval(FlickerIndex(m), Ci95(r, "flicker_index")), Fmt(Metric(m, "temporal_diff_err")),
+                   Fmt(Metric(m, "tv_err_floor"), "%.2f"),
+                   r.cost ? Fmt(r.cost->median_ms, "%.3g") + " (" + Fmt(r.cost->min_ms, "%.3g") + "–" +
+                                Fmt(r.cost->max_ms, "%.3g") + ") on " + r.cost->device
+                          : "n/a",
+                   r.job.external && !(r.gpu_ms_per_frame > 0) ? std::string("n/a") : Fmt(r.gpu_ms_per_frame, "%.2f"),
+                   std::string(costs.front_tv_err[i] ? "●" : "") + " / " + (costs.front_relmse[i] ? "●" : "")});
+  }
+  doc.HtmlOnlyTable({"variant", "region", "tv_err (luminance²) [95 %]", "tv_ratio [95 %]",
+                     "joint error: temporal part [95 %]", "joint error: spatial part [95 %]",
+                     "flicker_index [95 %]", "temporal_diff_err", "tv_err_floor", "bench ms (min–max)",
+                     "render ms", "Pareto tv_err / relmse"},
+                    all);
+}
+
+void ShotTable(Document& doc, const Group& group, bool has_video) {
+  const std::string slug = Slug(group.key);
+  doc.Heading(3, group.key);
+  const JobResult* none = NoneOf(group);
+  int unresolved = 0;
+  if (none)
+    for (const JobResult* r : group.rows)
+      unresolved += r != none && Decide(EvidenceOf(*r), EvidenceOf(*none)) == Outcome::kUnresolved;
+  const std::string noise =
+      unresolved ? ", but " + std::to_string(unresolved) + " of its rows are **unresolved: reference noise**" : "";
+
+  const std::string reference = ReferenceSentence(group, noise);
+  const std::string cost = CostSentence(group);
   doc.Paragraph(reference + " " + cost +
                 " The other columns are in report.csv and, folded under the table, in report.html (region, `tv_err` itself, `tv_ratio`, "
                 "`flicker_index`, `tv_err_floor`, the temporal part of the joint error, ms).");
@@ -218,29 +257,7 @@ void ShotTable(Document& doc, const Group& group, bool has_video) {
              "spatial error, ratio to `none` [95 %]", "energy bias, fraction [95 %]", "time, ratio to `none` [95 %]",
              "instructions, ratio to `none`", "verdict"},
             cells);
-  // Every other column, for report.html (report.csv has them all too).
-  const Costs costs = CostsOf(group);
-  std::vector<std::vector<std::string>> all;
-  for (std::size_t i = 0; i < group.rows.size(); ++i) {
-    const JobResult& r = *group.rows[i];
-    const auto& m = r.metrics;
-    all.push_back({Code(Label(r)), Region(r), WithInterval(Metric(m, "tv_err"), Ci95(r, "tv_err")),
-                   WithInterval(Metric(m, "tv_ratio"), Ci95(r, "tv_ratio")),
-                   WithInterval(Metric(m, "relmse_temporal"), Ci95(r, "relmse_temporal")),
-                   WithInterval(Metric(m, "relmse_spatial"), Ci95(r, "relmse_spatial")),
-                   WithInterval(FlickerIndex(m), Ci95(r, "flicker_index")), Fmt(Metric(m, "temporal_diff_err")),
-                   Fmt(Metric(m, "tv_err_floor"), "%.2f"),
-                   r.cost ? Fmt(r.cost->median_ms, "%.3g") + " (" + Fmt(r.cost->min_ms, "%.3g") + "–" +
-                                Fmt(r.cost->max_ms, "%.3g") + ") on " + r.cost->device
-                          : "n/a",
-                   r.job.external && !(r.gpu_ms_per_frame > 0) ? std::string("n/a") : Fmt(r.gpu_ms_per_frame, "%.2f"),
-                   std::string(costs.front_tv_err[i] ? "●" : "") + " / " + (costs.front_relmse[i] ? "●" : "")});
-  }
-  doc.HtmlOnlyTable({"variant", "region", "tv_err (luminance²) [95 %]", "tv_ratio [95 %]",
-                     "joint error: temporal part [95 %]", "joint error: spatial part [95 %]",
-                     "flicker_index [95 %]", "temporal_diff_err", "tv_err_floor", "bench ms (min–max)",
-                     "render ms", "Pareto tv_err / relmse"},
-                    all);
+  AllColumnsTable(doc, group);
 }
 
 // Seed 004's approximations measured on their own, beside the shots that use them.

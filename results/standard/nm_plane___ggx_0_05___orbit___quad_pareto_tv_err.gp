@@ -12,6 +12,6 @@ plot 'nm_plane___ggx_0_05___orbit___quad_pareto.dat' index 0 using 1:2 with poin
      keyentry with points pt 6 lc rgb '#d62728' title '1: none', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: tk19', \
      keyentry with points pt 6 lc rgb '#d62728' title '3: supersample-2', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: unity-hdrp-nm', \
+     keyentry with points pt 6 lc rgb '#d62728' title '4: vmf', \
      keyentry with points pt 6 lc rgb '#d62728' title '5: toksvig', \
      keyentry with points pt 6 lc rgb '#d62728' title '6: lean'

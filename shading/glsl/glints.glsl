@@ -308,16 +308,18 @@ vec2 glintFinite(vec2 v) { return vec2(glintFiniteComponent(v.x), glintFiniteCom
 // N microdetails are distributed among the draws by the blend's weights, draw
 // i counting B(N w_i, p_i), and the count is the sum. Independent binomials
 // of one p add to the binomial of the summed trials, so the count is B(N, p)
-// whatever the weights (a Poisson-binomial of mean N sum_i w_i p_i where the
-// p_i differ, as the perturbed bins make them). The inversion is monotone in
-// n, so a weight that grows adds microdetails one at a time: sparkles appear
-// and stay rather than being redrawn. Each draw (cell, bin) must enter once:
-// the same draw read twice would count its microdetails twice, correlated.
+// whatever the weights. The weights that distribute are those of the cells,
+// levels, grids and probes; the 4 slope bins around h keep their bilinear
+// weights, which are each microdetail's lobe (glintCellCount). The inversion
+// is monotone in n, so a weight that grows adds microdetails one at a time:
+// sparkles appear and stay rather than being redrawn. Each draw (cell, bin)
+// must enter once: the same draw read twice would count its microdetails
+// twice, correlated.
 
 // The count over the footprint's microdetails, and what turns it into a
 // slope density: count / (total binArea).
 struct GlintCount {
-  real count;    // microdetails that reflect at h
+  real count;    // microdetails that reflect at h, each weighted by its lobe
   real total;    // N, the microdetails of the footprint
   real binArea;  // w^2, the slope area one microdetail's count spreads over
 };
@@ -329,10 +331,16 @@ real glintFootprintMicrodetails(vec2 dx, vec2 dy, real areaScale) {
   return areaScale * max(abs(cross2(dx, dy)), real(1));
 }
 
-// One cell's share n of the footprint, distributed over the 4 bins around
-// hpp by their bilinear weights: sum_j B(n t_j, p_j). Its mean is that of
-// glintCellDensity's blend times n w^2; its variance n sum_j t_j p_j (1 - p_j),
-// the binomial's, where the blend's is sum_j t_j^2 of that.
+// One cell's share n of the footprint at hpp: sum_j t_j B(n, p_j) over the 4
+// bins around hpp, t_j their bilinear weights. The weights are not a filter
+// to undo: they are each microdetail's lobe, the tent that realises D_l
+// (docs/glints.md, "Why the expectation is D_g"), and the reference's point
+// evaluation (glintCellDensity) applies the same. A microdetail whose slope
+// lies near a bin's edge lights the pixel partly, as it lights the
+// reference's. Distributing n over the bins instead (B(n t_j, p_j)) kept the
+// mean but made each microdetail's lobe a random top-hat: its light went to
+// fewer, brighter pixels, and the models showed 0.4-0.8 of the reference's
+// sparkles (glint-plane under dolly, contrast 3).
 real glintCellCount(GlintMaterial g, uint ch, vec2 hpp, real n, real w) {
   if (!(n > real(0))) return real(0);
   vec2 a = clampAlpha(g.alpha);
@@ -346,10 +354,10 @@ real glintCellCount(GlintMaterial g, uint ch, vec2 hpp, real n, real w) {
   real py0 = glintInterval(e0.y, e0.y + w, a.y);
   real py1 = glintInterval(e0.y + w, e0.y + real(2) * w, a.y);
   ivec2 i0 = ivec2(b0);
-  real k = glintDraw(n * (real(1) - f.x) * (real(1) - f.y), px0 * py0, glintBinHash(ch, i0));
-  k += glintDraw(n * f.x * (real(1) - f.y), px1 * py0, glintBinHash(ch, i0 + ivec2(1, 0)));
-  k += glintDraw(n * (real(1) - f.x) * f.y, px0 * py1, glintBinHash(ch, i0 + ivec2(0, 1)));
-  k += glintDraw(n * f.x * f.y, px1 * py1, glintBinHash(ch, i0 + ivec2(1, 1)));
+  real k = (real(1) - f.x) * (real(1) - f.y) * glintDraw(n, px0 * py0, glintBinHash(ch, i0));
+  k += f.x * (real(1) - f.y) * glintDraw(n, px1 * py0, glintBinHash(ch, i0 + ivec2(1, 0)));
+  k += (real(1) - f.x) * f.y * glintDraw(n, px0 * py1, glintBinHash(ch, i0 + ivec2(0, 1)));
+  k += f.x * f.y * glintDraw(n, px1 * py1, glintBinHash(ch, i0 + ivec2(1, 1)));
   return k;
 }
 

@@ -1,12 +1,15 @@
 // The count law of the glint models (glints.glsl, docs/glints.md "Counting
 // the footprint's microdetails"): over many footprints of one size and shape
-// at random places, the number of microdetails that reflect at h must have
-// the binomial's mean N p and variance N p (1 - p), N the footprint's
-// microdetails and p the probability that one of them reflects, at sizes on
-// a grid level and between two, for glints-zk16-counting and for
-// glints-db23's anisotropic grids, in double and float. glints-zk16 as
+// at random places, the light of the footprint's microdetails at h, each
+// weighted by its lobe (the bilinear weight of its slope bin at h, which is
+// how every model and the reference realise D_l), must have the mean N m1 and
+// the variance N (m2 - q2) of N microdetails drawn independently: m1, m2 the
+// mean lobe weight and its square's, q2 the independent bins' correction. So
+// the count keeps the binomial's statistics in the cells, levels, grids and
+// probes, at sizes on a grid level and between two, for glints-zk16-counting
+// and glints-db23's anisotropic grids, in double and float. glints-zk16 as
 // published keeps the mean and loses the variance: asserted, so that the
-// reason for the corrected variant stays measured.
+// reason for the corrected variants stays measured.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -35,22 +38,32 @@ MaterialDesc Glints(double alpha, double alpha_l, double density) {
 // (independent of glints.glsl's own).
 double BinProbability(double a, double b, double alpha) { return 0.5 * (std::erfc(a / alpha) - std::erfc(b / alpha)); }
 
-// The probability that one microdetail reflects at h along one axis: its
-// slope in the bin around h, the bins w wide and shifted by a uniform offset
-// per cell, the two bins nearest h weighted bilinearly (what each cell's
-// weights distribute). Averaged over the offset by the midpoint rule: the
-// integrand is smooth in the offset.
-double AxisProbability(double h, double w, double alpha) {
+// One axis of a microdetail's lobe weight at h: its slope falls in bin b
+// with probability p_b; the bins are w wide and shifted by a uniform offset
+// per cell; the two bins nearest h weigh (1 - f, f) (the tent that realises
+// D_l). m1 = E[sum_b t_b p_b], m2 = E[sum_b t_b^2 p_b] and q2 =
+// E[sum_b t_b^2 p_b^2] over the offset, by the midpoint rule (the integrands
+// are smooth in it). The two axes' offsets are independent and the weights
+// and probabilities products of the axes', so each moment of the 2D lobe is
+// the product of the axes'.
+struct LobeMoments {
+  double m1 = 0, m2 = 0, q2 = 0;
+};
+
+LobeMoments AxisLobeMoments(double h, double w, double alpha) {
   const int steps = 4096;
-  double sum = 0;
+  LobeMoments r;
   for (int i = 0; i < steps; ++i) {
     const double o = (i + 0.5) / steps;
     const double t = h / w - o - 0.5;
     const double b0 = std::floor(t), f = t - b0;
     const double e0 = (b0 + o) * w;
-    sum += (1 - f) * BinProbability(e0, e0 + w, alpha) + f * BinProbability(e0 + w, e0 + 2 * w, alpha);
+    const double p0 = BinProbability(e0, e0 + w, alpha), p1 = BinProbability(e0 + w, e0 + 2 * w, alpha);
+    r.m1 += (1 - f) * p0 + f * p1;
+    r.m2 += (1 - f) * (1 - f) * p0 + f * f * p1;
+    r.q2 += (1 - f) * (1 - f) * p0 * p0 + f * f * p1 * p1;
   }
-  return sum / steps;
+  return {r.m1 / steps, r.m2 / steps, r.q2 / steps};
 }
 
 struct Footprint {
@@ -71,9 +84,8 @@ struct Moments {
 };
 
 // The count at `samples` uniformly random places (far apart against the
-// cells), its sample mean and variance against the binomial's, and their
-// standard errors: var / M for the mean, (mu4 - var^2) / M for the variance
-// with the binomial's fourth central moment.
+// cells), its sample mean and variance against the law's, and their
+// standard errors: var / M for the mean, (mu4 - var^2) / M for the variance.
 template <class T>
 Moments CountMoments(GlintMode mode, const MaterialDesc& m, glm::dvec2 hpp, Footprint fp, int samples, unsigned seed) {
   const double cell = 1 / std::sqrt(m.glint_density);
@@ -94,12 +106,15 @@ Moments CountMoments(GlintMode mode, const MaterialDesc& m, glm::dvec2 hpp, Foot
   r.mean = sum / samples;
   r.var = (sum2 - samples * r.mean * r.mean) / (samples - 1);
   const double w = std::sqrt(2.0) * m.glint_alpha_l;
-  const double p = AxisProbability(hpp.x, w, m.alpha.x) * AxisProbability(hpp.y, w, m.alpha.y);
-  r.expect_mean = r.total * p;
-  r.expect_var = r.total * p * (1 - p);
-  const double q = 1 - p, mu4 = r.total * p * q * (1 + 3 * (r.total - 2) * p * q);
+  const LobeMoments x = AxisLobeMoments(hpp.x, w, m.alpha.x), y = AxisLobeMoments(hpp.y, w, m.alpha.y);
+  const double m1 = x.m1 * y.m1, m2 = x.m2 * y.m2, q2 = x.q2 * y.q2;
+  r.expect_mean = r.total * m1;
+  r.expect_var = r.total * (m2 - q2);
+  // The variance's standard error from the fourth moment of a sum of N
+  // independent small terms: about N m4 + 3 var^2, with m4 <= m2 (weights
+  // below one), so N m2 + 2 var^2 bounds mu4 - var^2.
   r.mean_err = std::sqrt(r.expect_var / samples);
-  r.var_err = std::sqrt((mu4 - r.expect_var * r.expect_var) / samples);
+  r.var_err = std::sqrt((r.total * m2 + 2 * r.expect_var * r.expect_var) / samples);
   return r;
 }
 
@@ -129,11 +144,10 @@ std::vector<Shape> Shapes() {
           {"96 x 6 at 1 rad (16 shared probes)", Ellipse(96, 6, 1.0)}};
 }
 
-// The count of the two counting models has the binomial's mean and variance
+// The count of the two counting models has the law's mean and variance
 // within 4.5 standard errors (about 1 in 10^5 to fail by chance per check,
-// 40 checks), and within 6 % beyond that: what the model may differ by (the
-// per-cell offsets make p vary a little from cell to cell, and N's fraction
-// is a Bernoulli draw per cell, which adds p^2 f (1 - f) per cell).
+// 40 checks), and within 6 % beyond that: what the model may differ by (N's
+// fraction is a Bernoulli draw per cell, which adds m1^2 f (1 - f) per cell).
 template <class T>
 void ExpectBinomialCounts(GlintMode mode) {
   const MaterialDesc m = Glints(0.3, 0.03, 1e4);
@@ -141,7 +155,7 @@ void ExpectBinomialCounts(GlintMode mode) {
   unsigned seed = 100;
   for (const Shape& s : Shapes()) {
     const Moments r = CountMoments<T>(mode, m, hpp, s.fp, 6000, ++seed);
-    std::printf("%-22s %-6s %-46s N %7.1f  mean %.4f (binomial %.4f)  variance %.4f (binomial %.4f, ratio %.3f)\n",
+    std::printf("%-22s %-6s %-46s N %7.1f  mean %.4f (law %.4f)  variance %.4f (law %.4f, ratio %.3f)\n",
                 ModeName(mode), sizeof(T) == 8 ? "double" : "float", s.what, r.total, r.mean, r.expect_mean, r.var,
                 r.expect_var, r.var / r.expect_var);
     EXPECT_NEAR(r.mean, r.expect_mean, 4.5 * r.mean_err + 0.02 * r.expect_mean) << ModeName(mode) << " " << s.what;
@@ -160,21 +174,23 @@ TEST(GlintCount, Db23FollowsTheBinomialLawOnItsAnisotropicGrids) {
 }
 
 // glints-zk16 as published (seed 001, slide 13: one draw per cell,
-// trilinear interpolation): its pixels keep the binomial's mean, but their
-// variance is the binomial's times the sum of the squared blend weights.
-// Asserted below 0.6 of the binomial's at every shape (the test prints the
-// ratio), far outside the counting models' bounds.
+// trilinear interpolation): its pixels keep the law's mean, but their
+// variance is the law's times the sum of the squared weights of the cells,
+// levels and probes it blends (0.28-0.64 of the law's at these shapes; the
+// most where its probes, one cell apart, read the same cells twice).
+// Asserted below 0.7 at every shape (the test prints the ratio), far outside
+// the counting models' bounds.
 TEST(GlintCount, PublishedZk16KeepsTheMeanAndLosesTheVariance) {
   const MaterialDesc m = Glints(0.3, 0.03, 1e4);
   const glm::dvec2 hpp{0.12, -0.07};
   unsigned seed = 300;
   for (const Shape& s : Shapes()) {
     const Moments r = CountMoments<double>(GlintMode::kFiltered, m, hpp, s.fp, 6000, ++seed);
-    std::printf("%-22s %-6s %-46s N %7.1f  mean %.4f (binomial %.4f)  variance %.4f (binomial %.4f, ratio %.3f)\n",
+    std::printf("%-22s %-6s %-46s N %7.1f  mean %.4f (law %.4f)  variance %.4f (law %.4f, ratio %.3f)\n",
                 "glints-zk16", "double", s.what, r.total, r.mean, r.expect_mean, r.var, r.expect_var,
                 r.var / r.expect_var);
     EXPECT_NEAR(r.mean, r.expect_mean, 4.5 * r.mean_err + 0.02 * r.expect_mean) << s.what;
-    EXPECT_LT(r.var, 0.6 * r.expect_var) << s.what;
+    EXPECT_LT(r.var, 0.7 * r.expect_var) << s.what;
     EXPECT_GT(r.var, 0.0) << s.what;
   }
 }
@@ -210,11 +226,12 @@ TEST(GlintCount, LargeFootprintsConvergeToTheGlobalNdf) {
       }
 }
 
-// The counting models' count is the number of microdetails: an integer
-// where the draws invert the binomial (small means), never above N, and
-// under sub-pixel motion (a thousandth of a cell, a thousandth of the size)
-// it changes by at most one microdetail in all but 1 % of the places: a
-// weight that grows adds microdetails one at a time.
+// The counting models' count is a sum over microdetails, each weighted by
+// its lobe (at most one): never negative, never above N, and under
+// sub-pixel motion (a thousandth of a cell, a thousandth of the size) it
+// changes by at most one microdetail's light in all but 1 % of the places:
+// a weight that grows adds microdetails one at a time instead of redrawing
+// the pixel.
 TEST(GlintCount, CountsAreMicrodetailsThatAppearOneAtATime) {
   const MaterialDesc m = Glints(0.3, 0.03, 1e4);
   const double cell = 0.01;
@@ -230,7 +247,7 @@ TEST(GlintCount, CountsAreMicrodetailsThatAppearOneAtATime) {
       const GlintFootprint<double> b{uv + glm::dvec2(1e-3, 0.7e-3) * cell, fp.dx * cell * 1.001, fp.dy * cell * 1.001,
                                      1.0};
       const GlintCount<double> ca = CountGlints<double>(mode, m, s, a), cb = CountGlints<double>(mode, m, s, b);
-      ASSERT_EQ(ca.count, std::floor(ca.count)) << ModeName(mode);
+      ASSERT_GE(ca.count, 0.0) << ModeName(mode);
       ASSERT_LE(ca.count, ca.total + 4) << ModeName(mode);
       jumps += std::abs(ca.count - cb.count) > 1;
     }

@@ -50,6 +50,10 @@ std::string CheckNumbers(const ShotCheck& c) {
          Fmt(c.d_tv_ref, "%.3g") + " (tolerance " + Fmt(c.tol_tv, "%.3g") + "), energy_bias " +
          Fmt(c.d_energy_bias, "%.3g") + " (tolerance " + Fmt(c.tol_energy, "%.3g") + "), tv_err " +
          Fmt(c.d_tv_err, "%.3g") + " (tolerance " + Fmt(c.tol_tv, "%.3g") + ")" +
+         (c.sparkle_count > 0 || c.sparkle_count_check > 0
+              ? ", sparkles per frame " + Fmt(c.sparkle_count, "%.4g") + " vs " + Fmt(c.sparkle_count_check, "%.4g") +
+                    ": " + Fmt(c.d_sparkle_count, "%.3g") + " (tolerance " + Fmt(c.tol_tv, "%.3g") + ")"
+              : "") +
          (c.unconverged_pixels ? "; " + std::to_string(c.unconverged_pixels) + " pixel-frames above tolerance" : "");
 }
 

@@ -103,5 +103,33 @@ TEST(ShotCheck, TheReferencesOwnNoiseIsTakenOutOfTvRef) {
   EXPECT_FALSE(moving.converged);
 }
 
+// A glint reference's sparkles per frame are part of what converges: the
+// far rows' sparkles that a glint-plane reference's own noise makes at
+// 8 x 8 samples (515 a frame, 493 at 16 x 16 over the whole frame, a 4 %
+// change, passes; 1.7 times the far rows' alone would not). A check without
+// sparkle statistics (both 0) passes as before.
+TEST(ShotCheck, AGlintReferencesSparklesMustHoldStill) {
+  ShotCheck still = Measured(1.0, 1.0, 0.0, 0.0, 0.5, 0.5);
+  still.sparkle_count = 515.0;
+  still.sparkle_count_check = 493.0;
+  JudgeConvergence(still);
+  EXPECT_NEAR(still.d_sparkle_count, 22.0 / 515.0, 1e-12);
+  EXPECT_TRUE(still.converged);
+  ShotCheck noisy = still;
+  noisy.sparkle_count = 29.8;
+  noisy.sparkle_count_check = 17.8;
+  JudgeConvergence(noisy);
+  EXPECT_FALSE(noisy.converged);
+  ShotCheck appearing = still;
+  appearing.sparkle_count = 0.0;
+  appearing.sparkle_count_check = 3.0;
+  JudgeConvergence(appearing);
+  EXPECT_FALSE(appearing.converged);
+  ShotCheck smooth = Measured(1.0, 1.0, 0.0, 0.0, 0.5, 0.5);
+  JudgeConvergence(smooth);
+  EXPECT_EQ(smooth.d_sparkle_count, 0.0);
+  EXPECT_TRUE(smooth.converged);
+}
+
 }  // namespace
 }  // namespace shimmer::experiments

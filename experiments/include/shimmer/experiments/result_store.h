@@ -39,9 +39,15 @@ struct ShotCheck {
   // F = mean stderr.Y^2 of each reference: the share of tv_err its own noise
   // adds (docs/metrics.md, tv_err_floor). Rows from before it was kept: 0.
   double tv_err_noise = 0, tv_err_noise_check = 0;
-  // |tv_ref_check / tv_ref - 1|, |energy_bias_check - energy_bias|, and the
-  // relative change of tv_err less each reference's noise F.
-  double d_tv_ref = 0, d_energy_bias = 0, d_tv_err = 0;
+  // Glint shots (a spec with metrics.sparkle_threshold): each reference's
+  // sparkles per frame (docs/metrics.md, "Sparkle statistics"), which a
+  // reference's own noise inflates where a pixel holds many microdetails and
+  // few samples. 0 where not measured (rows from before it was: both 0).
+  double sparkle_count = 0, sparkle_count_check = 0;
+  // |tv_ref_check / tv_ref - 1|, |energy_bias_check - energy_bias|, the
+  // relative change of tv_err less each reference's noise F, and
+  // |sparkle_count_check / sparkle_count - 1|.
+  double d_tv_ref = 0, d_energy_bias = 0, d_tv_err = 0, d_sparkle_count = 0;
   double tol_energy = 0.02, tol_tv = 0.10;  // the spec's reference.converge
   long long unconverged_pixels = 0;         // pixel-frames of the reference left above its tolerance at max_rounds
   bool converged = false;                   // every change within its tolerance
@@ -80,7 +86,7 @@ struct BenchmarkCost {
   shading::InstructionCensus kernel, none_kernel;
 };
 
-// Fills the changes (d_tv_ref, d_energy_bias, d_tv_err) and the verdict of a
+// Fills the changes (d_tv_ref, d_energy_bias, d_tv_err, d_sparkle_count) and the verdict of a
 // check from its measured metrics and tolerances. A tv_err below 0.1 % of
 // tv_ref is measured against that floor: `none` already matches the
 // reference there, and a relative change of reference noise means nothing.
@@ -93,7 +99,8 @@ void JudgeConvergence(ShotCheck& check);
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ShotCheck, reference_id, scene, material, camera, spp, check_spp, frame_stride,
                                                 tolerance, check_tolerance, tv_ref, tv_ref_check, energy_bias,
                                                 energy_bias_check, tv_err, tv_err_check, tv_err_noise,
-                                                tv_err_noise_check, d_tv_ref, d_energy_bias, d_tv_err, tol_energy,
+                                                tv_err_noise_check, sparkle_count, sparkle_count_check, d_tv_ref,
+                                                d_energy_bias, d_tv_err, d_sparkle_count, tol_energy,
                                                 tol_tv, unconverged_pixels, converged)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(BenchmarkCost, scene, derivatives, variant, params, material, camera,
                                                 width, height, repetitions, median_ms, min_ms, max_ms, none_median_ms,

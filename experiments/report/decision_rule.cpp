@@ -57,6 +57,7 @@ Evidence EvidenceOf(const JobResult& row) {
     e.sparkle_count_ratio = Metric(*sp, "mean_count_ratio");
     e.sparkle_variance_ratio = Metric(*sp, "count_variance_ratio");
     e.sparkle_lifetime_ratio = Metric(*sp, "lifetime_ratio");
+    e.glint = sp->contains("reference");
   }
   const shading::VariantInfo* info = shading::FindVariant(row.job.variant);
   e.smooth_limit = info && info->smooth_limit;
@@ -155,7 +156,12 @@ Outcome Decide(const Evidence& v, const Evidence& none) {
   const std::optional<PairedComparison> paired = PairedTvErr(v, none);
   switch (paired ? SeparatePaired(*paired) : Separate(v.tv_err_ci, none.tv_err_ci)) {
     case Verdict::kBetter: {
-      const bool blurrier = v.spatial_ci.Known() && none.spatial_ci.Known() &&
+      // On a glint material each model draws a microstructure of its own
+      // and `none` the reference's: their spatial errors measure that
+      // difference, not blur (an independent draw of the same law has about
+      // twice the smooth limit's), and the sparkle test takes the blur
+      // test's place.
+      const bool blurrier = !v.glint && v.spatial_ci.Known() && none.spatial_ci.Known() &&
                             v.spatial_ci.lo > kSpatialTolerance * none.spatial_ci.hi;
       if (blurrier) return Outcome::kBlurrier;
       if (!Meets(v.energy_ci, v.energy_bias)) return Outcome::kLosesEnergy;
@@ -200,7 +206,9 @@ std::string DecisionRuleText() {
          "`none`'s); (2) it does not blur beyond tolerance: the lower end of its spatial error "
          "(`relmse_spatial`) interval is at most " +
          FormatNumber(kSpatialTolerance, "%g") +
-         "× the upper end of `none`'s (else **steadier, blurrier**); and (3) it keeps the highlight: its "
+         "× the upper end of `none`'s (else **steadier, blurrier**; not on a glint material, where each model "
+         "draws a microstructure of its own and `none` the reference's, so that the spatial error measures "
+         "that difference and not blur, and test (4) takes its place); and (3) it keeps the highlight: its "
          "`energy_bias` interval meets ±" +
          FormatNumber(kEnergyTolerance, "%.2f") +
          " (else **steadier, loses energy**); on a glint material (4) its sparkles per frame and their "

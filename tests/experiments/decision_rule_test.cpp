@@ -121,6 +121,26 @@ TEST(DecisionRule, GlintVerdictsWeighCountVarianceAndLifetimeAndNameTheSmoothLim
   EXPECT_EQ(OutcomeText(Outcome::kSmoothLimit), "smooth limit (no glints)");
 }
 
+// On a glint material the spatial error compares two microstructures (each
+// model draws its own, `none` draws the reference's), not a blur: a model
+// ten times `none`'s spatial error that keeps the glints is better there,
+// and the same numbers on a smooth material are blurrier.
+TEST(DecisionRule, OnAGlintMaterialTheSparklesJudgeInsteadOfTheSpatialError) {
+  RowNumbers own;
+  own.tv_err = 0.1, own.spatial = 0.5, own.spatial_half = 0.05;  // 10x none's
+  JobResult glint = Row("glint-plane", "glints:0.3", "orbit", "glints-zk16-counting", own);
+  glint.metrics["sparkles"] = {{"reference", {{"mean_count", 300.0}}},
+                               {"mean_count_ratio", 0.95},
+                               {"count_variance_ratio", 1.1},
+                               {"lifetime_ratio", 1.0}};
+  EXPECT_TRUE(EvidenceOf(glint).glint);
+  EXPECT_EQ(Decide(EvidenceOf(glint), Of(kNone)), Outcome::kBetter);
+  glint.metrics["sparkles"]["mean_count_ratio"] = 0.3;  // the glitter is gone: no blur test needed to say so
+  EXPECT_EQ(Decide(EvidenceOf(glint), Of(kNone)), Outcome::kLosesGlints);
+  EXPECT_FALSE(Of(own).glint);
+  EXPECT_EQ(Decide(Of(own), Of(kNone)), Outcome::kBlurrier);
+}
+
 TEST(DecisionRule, ATieDominatedByReferenceNoiseIsUnresolved) {
   RowNumbers noisy;
   noisy.tv_err = 0.95, noisy.floor = 0.9;

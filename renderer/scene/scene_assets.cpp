@@ -1,6 +1,6 @@
 // Mesh assets placed in scenes: a file loaded (mesh_loading.h), moved by its
 // transform, its meshes merged into one with one BVH (triangle_bvh.h), and
-// the result kept per process by the asset's content and the transform, so
+// the result kept per process by the asset's path, content and transform, so
 // that the jobs of a spec load and build each placement once.
 #include <algorithm>
 #include <cmath>
@@ -71,7 +71,11 @@ Result<std::shared_ptr<const PlacedMesh>> PlaceAsset(const std::filesystem::path
   using R = Result<std::shared_ptr<const PlacedMesh>>;
   auto hash = AssetContentHash(file);
   if (!hash) return hash.failure();
-  const std::string key = *hash + ":" + TransformKey(transform);
+  // The path is part of the key as well as the content: a placed mesh keeps
+  // the paths of its texture files, and an equal copy of the asset in another
+  // folder must read its own (the first copy's may be gone).
+  const std::string key = std::filesystem::absolute(file).lexically_normal().string() + ":" + *hash + ":" +
+                          TransformKey(transform);
   PlacementCache& cache = Placements();
   {
     std::lock_guard lock(cache.mutex);

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 
 #include "cli_run.h"
@@ -80,6 +81,25 @@ void ExpectSceneError(const fs::path& file, const std::string& where, const std:
   EXPECT_NE(s.error().find(file.string() + ": " + where), std::string::npos) << s.error();
   EXPECT_NE(s.error().find(problem), std::string::npos) << s.error();
   EXPECT_EQ(s.error().find('\n'), std::string::npos) << s.error();
+}
+
+// Placements are kept per process, and a placed mesh keeps its texture
+// files' paths: an equal copy of an asset in another folder reads its own
+// texture, also after the first copy is gone (two tests that each wrote the
+// same quad once shared the first one's deleted texture path).
+TEST(SceneAssets, AnEqualCopyElsewhereReadsItsOwnTextures) {
+  std::filesystem::path second_scene;
+  shimmer::testing::TempDir second;
+  {
+    shimmer::testing::TempDir first;
+    auto a = scene::LoadScene(shimmer::testing::WriteRoughnessQuad(first.path()).string());
+    ASSERT_TRUE(a) << a.error();
+    ASSERT_TRUE(a->primitives.at(0).roughness_map);
+    second_scene = shimmer::testing::WriteRoughnessQuad(second.path());
+  }  // the first copy, texture included, is deleted here
+  auto b = scene::LoadScene(second_scene.string());
+  ASSERT_TRUE(b) << b.error();
+  ASSERT_TRUE(b->primitives.at(0).roughness_map);
 }
 
 TEST(SceneAssets, BadAssetsAreOneErrorNamingTheFileAndTheProblem) {

@@ -27,6 +27,10 @@ bool KeepsGlints(const Evidence& v) {
          Within(v.sparkle_lifetime_ratio, kSparkleTolerance);
 }
 
+// The material spec of a glint material (docs/glints.md): its rows form the
+// answer's "glints" row and are judged by their sparkles, not their blur.
+bool IsGlintMaterial(const std::string& material) { return material.rfind("glints", 0) == 0; }
+
 bool Near(double value, double baseline) {
   if (std::isnan(value) || std::isnan(baseline)) return false;
   if (baseline == 0) return value == 0;
@@ -57,8 +61,8 @@ Evidence EvidenceOf(const JobResult& row) {
     e.sparkle_count_ratio = Metric(*sp, "mean_count_ratio");
     e.sparkle_variance_ratio = Metric(*sp, "count_variance_ratio");
     e.sparkle_lifetime_ratio = Metric(*sp, "lifetime_ratio");
-    e.glint = sp->contains("reference");
   }
+  e.glint = IsGlintMaterial(row.job.material);
   const shading::VariantInfo* info = shading::FindVariant(row.job.variant);
   e.smooth_limit = info && info->smooth_limit;
   e.draws = row.draws;
@@ -235,7 +239,7 @@ std::string DecisionRuleText() {
 }
 
 std::string CellRowOf(const Group& group) {
-  if (group.material.rfind("glints", 0) == 0) return "glints";
+  if (IsGlintMaterial(group.material)) return "glints";
   // One read of the traits (a row stored before they were kept loads its scene file for them).
   const SceneTraits traits = group.rows.empty() ? SceneTraits{} : TraitsOf(*group.rows.front());
   if (!traits.geometry_class.empty()) return traits.geometry_class;

@@ -79,8 +79,7 @@ struct Evidence {
   double tv_err = kNaN, joint = kNaN, spatial = kNaN, energy_bias = kNaN, noise_share = kNaN;
   double sparkle_count_ratio = kNaN;  // with sparkle statistics: test's mean count over the reference's
   double sparkle_variance_ratio = kNaN, sparkle_lifetime_ratio = kNaN;  // the count's variance, a sparkle's life
-  // Measured with sparkle statistics against a reference: a glint material,
-  // judged by its sparkles instead of its spatial error (Decide).
+  // A glint material: judged by its sparkles instead of its spatial error (Decide).
   bool glint = false;
   bool smooth_limit = false;  // the variant is a glint material's limit without sparkles (glints-smooth)
   double noise_contrast = kNaN;       // sqrt(ref_noise) / ref_mean; NaN in stores measured before it

@@ -105,9 +105,8 @@ void JudgeConvergence(ShotCheck& c) {
   // a few hundred samples, its own noise makes sparkles of its own
   // (glint-plane at 8 x 8 x 4 samples: 1.7 times the far rows' sparkles at
   // 16 x 16), and their count falls as the samples grow.
-  c.d_sparkle_count = c.sparkle_count > 0 || c.sparkle_count_check > 0
-                          ? RelativeChange(c.sparkle_count_check, c.sparkle_count)
-                          : 0.0;
+  // Not measured (both 0): no change.
+  c.d_sparkle_count = RelativeChange(c.sparkle_count_check, c.sparkle_count);
   c.converged = c.d_energy_bias <= c.tol_energy && c.d_tv_ref <= c.tol_tv && c.d_tv_err <= c.tol_tv &&
                 c.d_sparkle_count <= c.tol_tv;
 }

@@ -304,6 +304,18 @@ void NormalMapMemorySection(Document& doc, const std::vector<Group>& groups) {
             cells);
 }
 
+// A sparkle ratio with its 95 % interval where the row has one (rows
+// measured before the intervals were kept show the ratio alone).
+std::string SparkleRatio(const nlohmann::json& sparkles, const char* key) {
+  std::string text = Fmt(Metric(sparkles, key), "%.3g");
+  const auto ci = sparkles.find("ci95");
+  if (ci == sparkles.end() || !ci->is_object()) return text;
+  const auto i = ci->find(key);
+  if (i == ci->end() || !i->is_array() || i->size() != 2 || !(*i)[0].is_number() || !(*i)[1].is_number())
+    return text;
+  return text + " " + Bounds((*i)[0].get<double>(), (*i)[1].get<double>());
+}
+
 // Glint shots (seed 001): what the eye sees of sparkles, beside tv_err. Rows
 // measured with a sparkle threshold only (docs/metrics.md, "Sparkle
 // statistics"); the reference's own statistics once per shot.
@@ -332,8 +344,8 @@ void SparkleSection(Document& doc, const std::vector<Group>& groups) {
                                               : Decide(EvidenceOf(*r), EvidenceOf(*baseline));
       cells.push_back({g.Shot(), Code(r->job.variant), Fmt(number(test, "mean_count"), "%.1f"),
                        Fmt(number(test, "count_cv"), "%.3f"), Fmt(number(test, "mean_lifetime"), "%.2f"),
-                       Fmt(number(*sp, "mean_count_ratio"), "%.3g"), Fmt(number(*sp, "count_variance_ratio"), "%.3g"),
-                       Fmt(number(*sp, "lifetime_ratio"), "%.3g"), OutcomeText(outcome)});
+                       SparkleRatio(*sp, "mean_count_ratio"), SparkleRatio(*sp, "count_variance_ratio"),
+                       SparkleRatio(*sp, "lifetime_ratio"), OutcomeText(outcome)});
     }
   }
   if (cells.empty()) return;
@@ -342,7 +354,9 @@ void SparkleSection(Document& doc, const std::vector<Group>& groups) {
                 " in a frame (docs/metrics.md, \"Sparkle statistics\"). Count: sparkle pixels per frame, mean over "
                 "the frames; CV: its standard deviation over time over the mean (how much the number of sparkles "
                 "flickers); lifetime: mean frames a sparkle stays bright, tracked through the motion vectors. "
-                "Ratios are the variant's over the reference's: 1 is the reference's glitter.");
+                "Ratios are the variant's over the reference's: 1 is the reference's glitter; in brackets their "
+                "95 % interval (tiles and frame blocks resampled, the variant and the reference with the same "
+                "draws).");
   doc.Table({"shot", "variant", "count", "count CV", "lifetime", "count ratio", "count variance ratio",
              "lifetime ratio", "verdict against `none`"},
             cells);

@@ -18,20 +18,6 @@ namespace {
 enum Scalar { kPixels, kFlickerPower, kFlickerSegments, kT0, kR0, kScalars };
 enum PerBlock { kST, kSR, kDT, kDR, kDE, kSQ, kDQ, kPerBlock };
 
-// SplitMix64 (Steele, Lea & Flood 2014): the same draws on every platform,
-// unlike std::uniform_int_distribution.
-struct SplitMix64 {
-  static constexpr std::uint64_t kGamma = 0x9e3779b97f4a7c15ULL;  // the state's step per draw
-  std::uint64_t state;
-  std::uint64_t Next() {
-    std::uint64_t z = (state += kGamma);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  }
-  int Below(int n) { return static_cast<int>((static_cast<unsigned __int128>(Next()) * n) >> 64); }
-};
-
 double Quantile(std::vector<double> sorted, double q) {
   const double at = q * (sorted.size() - 1);
   const size_t i = static_cast<size_t>(at);
@@ -47,10 +33,8 @@ double Variance(const std::vector<double>& x) {
   return stddev[0] * stddev[0] * static_cast<double>(x.size()) / static_cast<double>(x.size() - 1);
 }
 
-// The interval rule of TileBlockStatistics::Bootstrap on replicates of a
-// value: the percentile shape of `spread` (the joint replicates, or the
-// tiles-only ones when frames were not resampled), centred on the value and,
-// with `tiles` and `blocks`, scaled to the two-way random-effects variance.
+}  // namespace
+
 // Resampling tiles and blocks independently counts the tile x block
 // interaction three times (McCullagh 2000; Owen 2007): with V_J, V_T, V_B
 // the joint, tiles-only and blocks-only variances, the interaction is
@@ -71,6 +55,8 @@ Interval ScaledPercentile(double value, std::vector<double> spread, const std::v
   return Interval{value - scale * (median - Quantile(spread, 0.025)),
                   value + scale * (Quantile(spread, 0.975) - median)};
 }
+
+namespace {
 
 std::uint64_t Mix(std::uint64_t hash, std::uint64_t value) {
   SplitMix64 mix{hash ^ value};
@@ -252,8 +238,7 @@ TileBlockStatistics::Intervals TileBlockStatistics::Bootstrap(const Estimates& p
   // thousand times. A batch reads each tile's row once for all of its
   // replicates, and adds the tiles to each replicate's sums in tile order as
   // the serial loop did, so every sum keeps its bits. Replicate r draws
-  // tile_count + k_count numbers and SplitMix64's state only advances by its
-  // constant: replicate r starts where the serial loop would have.
+  // tile_count + k_count numbers (DrawReplicate).
   constexpr int kBatch = 32;
   const std::uint64_t draws_per_replicate = static_cast<std::uint64_t>(tile_count) + k_count;
   const int batches = (replicates + kBatch - 1) / kBatch;
@@ -265,12 +250,10 @@ TileBlockStatistics::Intervals TileBlockStatistics::Bootstrap(const Estimates& p
       const int first = b * kBatch, count = std::min(kBatch, replicates - first);
       std::fill(w.begin(), w.end(), 0);
       std::fill(c.begin(), c.end(), 0);
-      for (int j = 0; j < count; ++j) {
-        const std::uint64_t r = static_cast<std::uint64_t>(first + j);
-        SplitMix64 random{settings.seed + r * draws_per_replicate * SplitMix64::kGamma};
-        for (int i = 0; i < tile_count; ++i) ++w[static_cast<size_t>(random.Below(tile_count)) * kBatch + j];
-        for (int k = 0; k < k_count; ++k) ++c[static_cast<size_t>(j) * k_count + random.Below(k_count)];
-      }
+      for (int j = 0; j < count; ++j)
+        DrawReplicate(
+            settings, first + j, tile_count, k_count, [&](int i) { ++w[static_cast<size_t>(i) * kBatch + j]; },
+            [&](int k) { ++c[static_cast<size_t>(j) * k_count + k]; });
       std::fill(sums.begin(), sums.end(), 0.0);
       for (int t = 0; t < tile_count; ++t) {
         const double* row = rows_.data() + static_cast<size_t>(t) * stride_;

@@ -101,8 +101,9 @@ MetricsAccumulator::MetricsAccumulator(const AccumulatorSetup& setup)
     spectrum_.WeighPixels(std::move(weights));
   }
   if (setup.sparkle_threshold > 0) {
-    sparkle_test_ = SparkleTracker(setup.width, setup.height, setup.sparkle_threshold);
-    if (setup.has_reference) sparkle_ref_ = SparkleTracker(setup.width, setup.height, setup.sparkle_threshold);
+    const int tile = setup.bootstrap.tile;
+    sparkle_test_ = SparkleTracker(setup.width, setup.height, setup.sparkle_threshold, tile);
+    if (setup.has_reference) sparkle_ref_ = SparkleTracker(setup.width, setup.height, setup.sparkle_threshold, tile);
   }
 }
 
@@ -415,6 +416,7 @@ Status MetricsAccumulator::Finish(MetricsReport* report) {
       sparkles.reference->motion = sparkle_motion_ref_;
     }
     SetSparkleRatios(&sparkles);
+    if (has_ref) SetSparkleIntervals(&sparkles, block_frames_, setup_.bootstrap);
     if (frames > 1 && sparkle_motion_test_ == "none")
       report->warnings.push_back(std::string("sparkle lifetimes tracked without motion vectors (") +
                                  (has_ref ? "neither TEST nor REF has" : "TEST has no") +

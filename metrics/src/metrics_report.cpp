@@ -292,6 +292,10 @@ nlohmann::json ToJson(const MetricsReport& r) {
       sparkles["mean_count_ratio"] = optional(s.mean_count_ratio);
       sparkles["count_variance_ratio"] = optional(s.count_variance_ratio);
       sparkles["lifetime_ratio"] = optional(s.lifetime_ratio);
+      auto interval = [](const std::optional<Interval>& i) { return i ? json::array({i->lo, i->hi}) : json(nullptr); };
+      sparkles["ci95"] = {{"mean_count_ratio", interval(s.mean_count_ratio_ci)},
+                          {"count_variance_ratio", interval(s.count_variance_ratio_ci)},
+                          {"lifetime_ratio", interval(s.lifetime_ratio_ci)}};
     }
     j["sparkles"] = std::move(sparkles);
   }

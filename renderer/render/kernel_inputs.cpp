@@ -24,13 +24,18 @@ gpu::Camera ToGpu(const shading::CameraDesc& c) {
 
 }  // namespace
 
-std::array<std::int32_t, 6> KernelSpecialization(const ResolvedVariant& variant, const RenderSettings& settings) {
+bool Adaptive(const ResolvedVariant& variant, const RenderSettings& s) {
+  return variant.reference && s.reference_tolerance > 0;
+}
+
+std::array<std::int32_t, 7> KernelSpecialization(const ResolvedVariant& variant, const RenderSettings& settings) {
   return {variant.id,
           static_cast<std::int32_t>(settings.derivatives),
           variant.spp_n,
           scene::SceneFeatures(settings.scene),
           static_cast<std::int32_t>(settings.material.ndf),
-          variant.reference ? 1 : 0};
+          variant.reference ? 1 : 0,
+          Adaptive(variant, settings) ? 1 : 0};
 }
 
 gpu::FrameConstants FrameConstantsOf(const RenderSettings& s, int index) {
@@ -58,8 +63,7 @@ gpu::Push PushOf(const ResolvedVariant& variant, const RenderSettings& s, int in
   push.round[1] = index;
   push.round[2] = s.reference_replicates;
   push.round[3] = std::bit_cast<std::int32_t>(s.seed);
-  const bool adaptive = variant.reference && s.reference_tolerance > 0;
-  push.target[0] = adaptive ? float(s.reference_tolerance) : 0.0f;
+  push.target[0] = Adaptive(variant, s) ? float(s.reference_tolerance) : 0.0f;
   push.target[1] = float(kReferenceLuminanceFloor);
   return push;
 }

@@ -12,9 +12,13 @@
 
 namespace shimmer::render {
 
-// render.comp's constant_id 0..5: variant, derivative source, spp N, scene
-// features, NDF, reference.
-std::array<std::int32_t, 6> KernelSpecialization(const ResolvedVariant& variant, const RenderSettings& settings);
+// Whether the render is an adaptive reference (a tolerance instead of a
+// fixed sample count).
+bool Adaptive(const ResolvedVariant& variant, const RenderSettings& settings);
+
+// render.comp's constant_id 0..6: variant, derivative source, spp N, scene
+// features, NDF, reference, adaptive.
+std::array<std::int32_t, 7> KernelSpecialization(const ResolvedVariant& variant, const RenderSettings& settings);
 
 // Frame `index`'s camera and the one before it (motion), the light, the
 // material and the image size; the band fields (size[2], size[3]) are 0.

@@ -27,6 +27,11 @@ layout(constant_id = 4) const int MATERIAL_NDF = 0;
 // 1 for the reference: an SG light's integral is then taken by Monte Carlo
 // per sample; otherwise by the shading core's fixed quadrature.
 layout(constant_id = 5) const int REFERENCE_MC = 0;
+// An adaptive reference (a tolerance, not a fixed sample count): only its
+// kernel holds the tile rule's barrier (tileConverged). llvmpipe runs every
+// workgroup of a kernel with a barrier as coroutines, reached or not, which
+// cost the fixed references and supersample-N about 11 % (docs/renderer.md).
+layout(constant_id = 6) const int ADAPTIVE = 0;
 // The renderer defines SHIMMER_SG_LIGHT for scenes lit by a spherical
 // Gaussian; every other kernel leaves the SG integral out (pixel.glsl).
 #ifndef SHIMMER_SG_LIGHT
@@ -414,11 +419,16 @@ void addReferenceReplicate(ivec2 px, bool inside, int idx, Camera c, Camera prev
   vec3 diffA = repA > 0.0 ? get3(CH_DIFFUSE, idx) : vec3(0.0);
   float m2A = repA > 0.0 ? get(CH_M2, idx) : 0.0;
   float meanYA = luminance(specA + diffA);
-  if (pc.target.x > 0.0 && pc.round.x > 0) {
-    bool done = !inside;
-    if (inside && repA >= float(pc.round.z))
-      done = sqrt(m2A / ((repA - 1.0) * repA)) <= pc.target.x * max(meanYA, pc.target.y);
-    if (tileConverged(done)) return;
+  // The spec constant alone as the condition: specialization folds it and
+  // drops the branch, barriers and all (`ADAPTIVE != 0 && ...` would leave a
+  // logical and of a constant that the specializer's passes keep).
+  if (ADAPTIVE != 0) {
+    if (pc.round.x > 0) {
+      bool done = !inside;
+      if (inside && repA >= float(pc.round.z))
+        done = sqrt(m2A / ((repA - 1.0) * repA)) <= pc.target.x * max(meanYA, pc.target.y);
+      if (tileConverged(done)) return;
+    }
   }
   if (!inside) return;
   SampleSums sums = replicateSums(px, c, light, m, vp);

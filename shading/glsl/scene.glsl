@@ -306,22 +306,29 @@ real intersectTriangle(ShearedRay r, vec3 o, vec3 v0, vec3 v1, vec3 v2) {
   return t > RAY_TMIN ? t : real(-1);
 }
 
-// A triangle's corners, the xyz of its three scene words from `word` on.
-struct MeshTriangle {
-  vec3 a;
-  vec3 b;
-  vec3 c;
+// A triangle's corners and vertex words: its three scene words from `word`
+// on, each a corner's position and its vertex's word.
+struct TriangleCorners {
+  vec3 p0;
+  vec3 p1;
+  vec3 p2;
+  int v0;  // vertex words
+  int v1;
+  int v2;
 };
 
-MeshTriangle meshTriangle(int word) {
+TriangleCorners triangleAt(int word) {
   vec4 w0 = sceneWord(word);
   vec4 w1 = sceneWord(word + 1);
   vec4 w2 = sceneWord(word + 2);
-  MeshTriangle t;
-  t.a = vec3(w0.x, w0.y, w0.z);
-  t.b = vec3(w1.x, w1.y, w1.z);
-  t.c = vec3(w2.x, w2.y, w2.z);
-  return t;
+  TriangleCorners c;
+  c.p0 = vec3(w0.x, w0.y, w0.z);
+  c.p1 = vec3(w1.x, w1.y, w1.z);
+  c.p2 = vec3(w2.x, w2.y, w2.z);
+  c.v0 = int(w0.w);
+  c.v1 = int(w1.w);
+  c.v2 = int(w2.w);
+  return c;
 }
 
 struct MeshHit {
@@ -379,8 +386,8 @@ MeshHit traceMesh(int header, vec3 o, vec3 d, real tmax, int best) {
     if (count > 0) {
       for (int k = 0; k < count; k++) {
         int w = firstTri + 3 * (offset + k);
-        MeshTriangle tri = meshTriangle(w);
-        real t = intersectTriangle(sr, o, tri.a, tri.b, tri.c);
+        TriangleCorners tri = triangleAt(w);
+        real t = intersectTriangle(sr, o, tri.p0, tri.p1, tri.p2);
         // Equal t: the lower word, so the answer does not depend on the order of the walk.
         if (t > real(0) && (t < h.t || (t == h.t && w < h.word))) {
           h.t = t;
@@ -686,8 +693,8 @@ PixelCandidates withMeshCandidates(PixelCandidates l, PixelCone k, int header) {
       if (count > 0) {
         for (int i = 0; i < count; i++) {
           int w = firstTri + 3 * (offset + i);
-          MeshTriangle tri = meshTriangle(w);
-          if (!triangleOutsidePyramid(k, tri.a, tri.b, tri.c)) l = withCandidate(l, w);
+          TriangleCorners tri = triangleAt(w);
+          if (!triangleOutsidePyramid(k, tri.p0, tri.p1, tri.p2)) l = withCandidate(l, w);
         }
       } else {
         next = node + 1;
@@ -823,29 +830,7 @@ Hit traceCandidates(PixelCandidates l, vec3 o, vec3 d) {
 // the corners' attributes linearly, past the edges too, as a rasterizer's
 // helper lanes extrapolate them.
 
-struct TriangleCorners {
-  vec3 p0;
-  vec3 p1;
-  vec3 p2;
-  int v0;  // vertex words
-  int v1;
-  int v2;
-};
-
-TriangleCorners triangleCorners(Prim p) {
-  int w = int(p.radius);
-  vec4 w0 = sceneWord(w);
-  vec4 w1 = sceneWord(w + 1);
-  vec4 w2 = sceneWord(w + 2);
-  TriangleCorners c;
-  c.p0 = vec3(w0.x, w0.y, w0.z);
-  c.p1 = vec3(w1.x, w1.y, w1.z);
-  c.p2 = vec3(w2.x, w2.y, w2.z);
-  c.v0 = int(w0.w);
-  c.v1 = int(w1.w);
-  c.v2 = int(w2.w);
-  return c;
-}
+TriangleCorners triangleCorners(Prim p) { return triangleAt(int(p.radius)); }
 
 // The gradients of b1 and b2 in the plane (b0's is minus their sum): the
 // barycentrics of q are b1 = g1.(q - p0), b2 = g2.(q - p0).

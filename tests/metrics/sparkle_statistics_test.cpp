@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <limits>
 
 #include "shimmer/metrics/metrics_report.h"
@@ -233,6 +235,71 @@ TEST(SparkleStatistics, ReferenceAndRatios) {
 }
 
 // A reference with its own motion channels follows them, not the test's.
+// Sparkles as independent draws: pixel (x, y) of frame t is bright with
+// probability p (a hash of x, y, t and the seed), on a 48 x 48 frame of 24
+// frames. Two sequences of one p are two realisations of one law.
+SequenceSpec RandomSparkles(double p, unsigned seed) {
+  SequenceSpec s = Spec(24, [p, seed](int t, int x, int y) {
+    std::uint64_t h = (static_cast<std::uint64_t>(seed) << 40) ^ (static_cast<std::uint64_t>(t) << 24) ^
+                      (static_cast<std::uint64_t>(y) << 12) ^ static_cast<std::uint64_t>(x);
+    h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    h = (h ^ (h >> 27)) * 0x94d049bb133111ebULL;
+    h ^= h >> 31;
+    return static_cast<double>(h >> 11) * 0x1.0p-53 < p ? kBright : kDark;
+  });
+  s.width = s.height = 48;
+  s.motion = Motion(0, 0);
+  return s;
+}
+
+// The ratios' intervals: a test that is its reference has every ratio 1
+// in every resample, so the intervals are the point; two realisations of
+// one law have intervals that hold 1 (in 19 of 20 pairs or more: 95 %
+// intervals, with slack for 20 draws); twice the density has a count
+// ratio whose interval holds 2 and not 1.
+TEST(SparkleStatistics, RatioIntervalsHoldWhatTheSequencesShare) {
+  TempDir same;
+  WriteSequence(same / "test", RandomSparkles(0.02, 1));
+  MetricsReport r = Measure({.test = same / "test", .reference = same / "test", .sparkle_threshold = kTau});
+  ASSERT_TRUE(r.sparkles && r.sparkles->mean_count_ratio_ci && r.sparkles->lifetime_ratio_ci);
+  EXPECT_DOUBLE_EQ(r.sparkles->mean_count_ratio_ci->lo, 1.0);
+  EXPECT_DOUBLE_EQ(r.sparkles->mean_count_ratio_ci->hi, 1.0);
+  EXPECT_DOUBLE_EQ(r.sparkles->lifetime_ratio_ci->lo, 1.0);
+  EXPECT_DOUBLE_EQ(r.sparkles->lifetime_ratio_ci->hi, 1.0);
+
+  int count_holds = 0, variance_holds = 0, lifetime_holds = 0;
+  for (unsigned pair = 0; pair < 20; ++pair) {
+    TempDir dir;
+    WriteSequence(dir / "test", RandomSparkles(0.02, 100 + 2 * pair));
+    WriteSequence(dir / "reference", RandomSparkles(0.02, 101 + 2 * pair));
+    MetricsReport m = Measure({.test = dir / "test", .reference = dir / "reference", .sparkle_threshold = kTau});
+    ASSERT_TRUE(m.sparkles && m.sparkles->mean_count_ratio_ci && m.sparkles->count_variance_ratio_ci &&
+                m.sparkles->lifetime_ratio_ci);
+    const SparkleReport& sp = *m.sparkles;
+    auto holds = [](const Interval& i, double v) { return i.lo <= v && v <= i.hi; };
+    EXPECT_LT(sp.mean_count_ratio_ci->lo, *sp.mean_count_ratio);
+    EXPECT_GT(sp.mean_count_ratio_ci->hi, *sp.mean_count_ratio);
+    EXPECT_GE(sp.count_variance_ratio_ci->lo, 0.0);  // a ratio of variances, never below 0
+    count_holds += holds(*sp.mean_count_ratio_ci, 1.0);
+    variance_holds += holds(*sp.count_variance_ratio_ci, 1.0);
+    lifetime_holds += holds(*sp.lifetime_ratio_ci, 1.0);
+  }
+  std::printf("1 inside the intervals of 20 pairs of one law: count %d, count variance %d, lifetime %d\n",
+              count_holds, variance_holds, lifetime_holds);
+  EXPECT_GE(count_holds, 17);
+  EXPECT_GE(variance_holds, 17);
+  EXPECT_GE(lifetime_holds, 17);
+
+  TempDir twice;
+  WriteSequence(twice / "test", RandomSparkles(0.04, 7));
+  WriteSequence(twice / "reference", RandomSparkles(0.02, 8));
+  MetricsReport d = Measure({.test = twice / "test", .reference = twice / "reference", .sparkle_threshold = kTau});
+  ASSERT_TRUE(d.sparkles && d.sparkles->mean_count_ratio_ci);
+  EXPECT_GT(d.sparkles->mean_count_ratio_ci->lo, 1.5);
+  EXPECT_LT(d.sparkles->mean_count_ratio_ci->lo, 2.0);
+  EXPECT_GT(d.sparkles->mean_count_ratio_ci->hi, 2.0);
+}
+
 TEST(SparkleStatistics, ReferenceFollowsItsOwnMotionWhenItHasSome) {
   TempDir dir;
   SequenceSpec test = Spec(6, [](int, int, int) { return kDark; });

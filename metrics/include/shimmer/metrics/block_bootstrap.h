@@ -25,6 +25,40 @@ struct Interval {
   double lo = 0, hi = 0;
 };
 
+// SplitMix64 (Steele, Lea & Flood 2014): the same draws on every platform,
+// unlike std::uniform_int_distribution.
+struct SplitMix64 {
+  static constexpr std::uint64_t kGamma = 0x9e3779b97f4a7c15ULL;  // the state's step per draw
+  std::uint64_t state;
+  std::uint64_t Next() {
+    std::uint64_t z = (state += kGamma);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  }
+  int Below(int n) { return static_cast<int>((static_cast<unsigned __int128>(Next()) * n) >> 64); }
+};
+
+// Replicate r's resample: `tiles` tiles, then `blocks` frame blocks, each
+// drawn uniformly with replacement and handed to on_tile / on_block. Every
+// bootstrap of one sequence draws replicate r alike, so that statistics
+// resampled apart (TileBlockStatistics, the sparkle ratios) share their
+// draws: replicate r starts where a serial loop over replicates would.
+template <class OnTile, class OnBlock>
+void DrawReplicate(const BootstrapSettings& settings, int r, int tiles, int blocks, OnTile on_tile, OnBlock on_block) {
+  const std::uint64_t per_replicate = static_cast<std::uint64_t>(tiles) + static_cast<std::uint64_t>(blocks);
+  SplitMix64 random{settings.seed + static_cast<std::uint64_t>(r) * per_replicate * SplitMix64::kGamma};
+  for (int i = 0; i < tiles; ++i) on_tile(random.Below(tiles));
+  for (int k = 0; k < blocks; ++k) on_block(random.Below(blocks));
+}
+
+// The interval rule of every bootstrap here, on replicates of a value: the
+// percentile shape of `spread` (the joint replicates, or the tiles-only
+// ones when frames were not resampled), centred on the value and, with
+// `tiles` and `blocks`, scaled to the two-way random-effects variance.
+Interval ScaledPercentile(double value, std::vector<double> spread, const std::vector<double>* tiles,
+                          const std::vector<double>* blocks);
+
 // The normal distribution's two-sided 95 % quantile.
 inline constexpr double kZ95 = 1.959963984540054;
 

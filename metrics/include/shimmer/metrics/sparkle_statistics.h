@@ -25,6 +25,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "shimmer/metrics/block_bootstrap.h"
+
 namespace shimmer::metrics {
 
 // One sequence's statistics. Undefined values (a zero denominator) are empty.
@@ -39,6 +41,11 @@ struct SparkleStatistics {
   std::vector<long long> counts;  // count_t, t = 0..N-1
   long long births = 0;           // sparkle pixels with age 1 at t >= 1
   long long tracked = 0;          // sparkle pixel-frames whose track starts after frame 0 (age <= t)
+  // The same three per tile and frame, for the intervals: the tiles are
+  // the square tiles that hold region pixels, in row order, and entry
+  // [t * tiles + i] is tile i in frame t.
+  int tiles = 0;
+  std::vector<int> tile_sparkles, tile_births, tile_tracked;
 };
 
 // The neighbourhood's Gaussian sigma, in pixels: wide enough that the
@@ -56,6 +63,8 @@ struct SparkleReport {
   std::optional<SparkleStatistics> reference;  // with a reference
   // test / reference; empty without a reference or when either side is undefined or the denominator is 0.
   std::optional<double> mean_count_ratio, count_variance_ratio, lifetime_ratio;
+  // Their 95 % intervals (SetSparkleIntervals); empty where the ratio is.
+  std::optional<Interval> mean_count_ratio_ci, count_variance_ratio_ci, lifetime_ratio_ci;
 };
 
 // Follows one sequence's sparkles frame by frame: a pixel's age (frames it
@@ -68,7 +77,8 @@ struct SparkleReport {
 class SparkleTracker {
  public:
   SparkleTracker() = default;
-  SparkleTracker(int width, int height, double contrast);
+  // `tile`: the side of the square tiles the intervals resample.
+  SparkleTracker(int width, int height, double contrast, int tile);
 
   bool active() const { return width_ > 0; }
 
@@ -86,12 +96,16 @@ class SparkleTracker {
  private:
   struct RowCounts {
     long long sparkles = 0, births = 0, tracked = 0;
+    std::vector<int> per_tile;  // sparkles, births, tracked of each tile column in this row
   };
   // Row y's sparkles and their ages (frame t's `current_`).
   RowCounts TrackRow(int y, const uint8_t* sparkle, const cv::Vec2f* motion);
 
   int width_ = 0, height_ = 0;
   double contrast_ = 0;
+  int tile_ = 8, tiles_x_ = 0, tiles_y_ = 0;
+  std::vector<uint8_t> tile_in_region_;                   // per tile of the frame: ever held a region pixel
+  std::vector<int> tile_sparkles_, tile_births_, tile_tracked_;  // [frame][every tile of the frame]
   cv::Mat luminance_, region_;                    // the current frame's rows (CV_32F, CV_8U)
   std::vector<const cv::Vec2f*> motion_rows_;     // its motion rows, or nulls
   int frame_ = 0;  // t of the frame being added
@@ -103,5 +117,14 @@ class SparkleTracker {
 
 // The ratios of a report with both sides filled in.
 void SetSparkleRatios(SparkleReport* report);
+
+// The ratios' 95 % intervals, by the block bootstrap of the other metrics
+// (block_bootstrap.h): tiles and frame blocks resampled together, the test
+// and the reference with the same draws (so a ratio's interval holds what
+// the two sides do not share), and the interaction corrected as there. A
+// ratio left empty by SetSparkleRatios keeps no interval; so do all of them
+// with fewer than 2 frames or sides of other sizes.
+void SetSparkleIntervals(SparkleReport* report, const std::vector<int>& block_frames,
+                         const BootstrapSettings& settings);
 
 }  // namespace shimmer::metrics

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <vector>
 
 #include "shimmer/core/result.h"
@@ -36,6 +37,11 @@ Result<metrics::MetricsReport> MeasureAgainst(const Job& job, const std::filesys
 // of the batch's `none` (the ratio's denominator). A cost of other kernels
 // is timed again; a comment edit in a shader times nothing again.
 std::string BenchmarkKernels(const BenchmarkBatch& batch, std::size_t k);
+
+// Runs `work` on `options.jobs` workers, this thread one of them, each with
+// a Vulkan device of its own (RunOptions::device_lane): lavapipe leaves
+// cores idle at a dispatch's tail that a second device fills.
+void OnEachLane(const RunOptions& options, const std::function<void(const RunOptions& on_lane)>& work);
 
 double SecondsSince(std::chrono::steady_clock::time_point start);
 // One check per shot (reference id) that the store lacks (shot_check.cpp),

@@ -215,9 +215,7 @@ Status CheckShots(const std::vector<Job>& all_jobs, const RunOptions& options, R
   std::mutex mutex;
   std::atomic<std::size_t> next{0};
   std::optional<Error> error;
-  auto worker = [&](int lane) {
-    RunOptions on_lane = options;
-    on_lane.device_lane = lane;  // a device of its own (RunOptions::device_lane)
+  OnEachLane(options, [&](const RunOptions& on_lane) {
     for (std::size_t k = next++; k < shots.size(); k = next++) {
       const Job& job = shots[k];
       const std::string what = job.scene + " " + job.material + " " + job.camera;
@@ -240,11 +238,7 @@ Status CheckShots(const std::vector<Job>& all_jobs, const RunOptions& options, R
       progress->eta_s = 0;
       if (options.progress) options.progress(*progress);
     }
-  };
-  std::vector<std::thread> threads;
-  for (int i = 1; i < std::max(1, options.jobs); ++i) threads.emplace_back(worker, i);
-  worker(0);
-  for (std::thread& t : threads) t.join();
+  });
   if (error) return Status(*error);
   return Ok();
 }

@@ -14,6 +14,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
   gnuplot-nox chromium
   slurm-wlm munge sqlite3 python3
+  python3-numpy python3-scipy  # the metrics benchmark's baseline (bench/metrics_numpy_baseline.py)
 )
 
 missing=()

@@ -12,6 +12,5 @@ plot 'wires___ggx_0_5___orbit___analytic_pareto.dat' index 0 using 1:3 with poin
      keyentry with points pt 6 lc rgb '#d62728' title '1: tk19-forward-rect', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: vlachos15', \
      keyentry with points pt 6 lc rgb '#d62728' title '3: k16-ggx-proxy', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: supersample-2', \
-     keyentry with points pt 6 lc rgb '#d62728' title '5: supersample-3', \
-     keyentry with points pt 6 lc rgb '#d62728' title '6: supersample-4'
+     keyentry with points pt 6 lc rgb '#d62728' title '4: supersample-3', \
+     keyentry with points pt 6 lc rgb '#d62728' title '5: supersample-4'

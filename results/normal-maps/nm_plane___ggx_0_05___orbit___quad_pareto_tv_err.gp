@@ -12,5 +12,7 @@ plot 'nm_plane___ggx_0_05___orbit___quad_pareto.dat' index 0 using 1:2 with poin
      keyentry with points pt 6 lc rgb '#d62728' title '1: none', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: tk19', \
      keyentry with points pt 6 lc rgb '#d62728' title '3: tk19+toksvig', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: toksvig', \
-     keyentry with points pt 6 lc rgb '#d62728' title '5: lean'
+     keyentry with points pt 6 lc rgb '#d62728' title '4: vmf', \
+     keyentry with points pt 6 lc rgb '#d62728' title '5: toksvig', \
+     keyentry with points pt 6 lc rgb '#d62728' title '6: k16-ggx-rect-stable+lean', \
+     keyentry with points pt 6 lc rgb '#d62728' title '7: lean'

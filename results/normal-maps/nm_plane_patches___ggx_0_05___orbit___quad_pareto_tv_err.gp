@@ -11,5 +11,4 @@ plot 'nm_plane_patches___ggx_0_05___orbit___quad_pareto.dat' index 0 using 1:2 w
      'nm_plane_patches___ggx_0_05___orbit___quad_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
      keyentry with points pt 6 lc rgb '#d62728' title '1: tk19', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: nm-mip', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: vmf', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: unity-hdrp-nm'
+     keyentry with points pt 6 lc rgb '#d62728' title '3: unity-hdrp-nm'

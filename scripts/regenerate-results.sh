@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Regenerates the committed reports under results/ with the built shimmer:
-# runs every spec into runs/<spec>/ (a store and its frame cache, kept, so a
-# second call recomputes only the jobs whose ids moved) and writes each
+# runs every spec into runs/<spec>/ (a store, kept, so a
+# second call recomputes only the jobs whose ids moved; the frames are
+# deleted once measured, so a metrics-only change renders again: `run
+# --keep-frames` would keep them, at about 30 MB a job) and writes each
 # report into results/<spec>/, then the README tour. The fits (fit.json,
 # fit.md) are not re-run here: `shimmer fit` takes them (docs/guide.md).
 # Usage: scripts/regenerate-results.sh [SPEC ...]   (default: every spec)

@@ -16,7 +16,7 @@ void AddPruneCommand(CLI::App& app) {
   auto dry_run = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand(
       "prune", "Remove a results store's rows that this shimmer would not make as they are (older kernels, metrics or "
-      "content; external sequences are kept)");
+      "content, external sequences included)");
   cmd->add_option("db", *db, "Results store (from shimmer run)")->required();
   cmd->add_flag("--dry-run", *dry_run, "Count what would be removed; change nothing");
   cmd->callback([db, dry_run] {

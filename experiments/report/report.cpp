@@ -260,14 +260,10 @@ std::vector<int> ParetoFront(const std::vector<double>& cost, const std::vector<
 
 std::vector<JobResult> CurrentRows(std::vector<JobResult> rows, const std::set<std::string>& current,
                                    std::string* note) {
-  // An external sequence's row measures frames shimmer did not render: no
-  // kernel made it, and its id does not move with one.
-  auto is_current = [&](const JobResult& r) { return r.job.external || current.count(r.id) > 0; };
+  auto is_current = [&](const JobResult& r) { return current.count(r.id) > 0; };
   const std::size_t kept = std::size_t(std::count_if(rows.begin(), rows.end(), is_current));
-  const std::size_t external =
-      std::size_t(std::count_if(rows.begin(), rows.end(), [](const JobResult& r) { return bool(r.job.external); }));
   if (kept == rows.size()) return rows;
-  if (kept == external) {
+  if (kept == 0) {
     if (note)
       *note = "no row of the store is one this shimmer would make (code or content changed since it ran): the "
               "report shows all " +

@@ -22,9 +22,11 @@ CurrentRowSet FindCurrentRows(const std::vector<JobResult>& rows) {
   std::vector<Job> jobs;
   for (const JobResult& r : rows) {
     if (r.sources.is_null() && !r.job.external) ++current.legacy;
-    if (r.job.external || JobId(r.job) != r.id) continue;
+    // An external sequence's row is current while its id is today's too:
+    // the frames' hashes and the metrics code's version are in it.
+    if (JobId(r.job) != r.id) continue;
     current.jobs.insert(r.id);
-    jobs.push_back(r.job);
+    if (!r.job.external) jobs.push_back(r.job);
   }
   for (const BenchmarkBatch& batch : BenchmarkBatches(jobs))
     for (std::size_t k = 0; k < batch.jobs.size(); ++k) current.costs.insert(BenchmarkKernels(batch, k));

@@ -35,7 +35,7 @@ Result<ResultStore::Pruned> ResultStore::PruneStale(const std::set<std::string>&
   std::vector<std::string> doomed;
   std::set<std::string> kept_references;
   for (const JobResult& r : *rows) {
-    if (r.job.external || current_jobs.count(r.id)) {
+    if (current_jobs.count(r.id)) {
       ++p.kept_jobs;
       if (r.job.external) ++p.kept_external;
       kept_references.insert(r.reference_id);
@@ -43,10 +43,10 @@ Result<ResultStore::Pruned> ResultStore::PruneStale(const std::set<std::string>&
       doomed.push_back(r.id);
     }
   }
-  if (p.kept_jobs == p.kept_external && !doomed.empty())
+  if (p.kept_jobs == 0 && !doomed.empty())
     return Result<Pruned>::Failure(path_ +
-                                   ": no job of this store is one this shimmer would run; pruning would leave only "
-                                   "external rows (nothing removed; run the spec with this shimmer first)");
+                                   ": no job of this store is one this shimmer would run; pruning would leave it "
+                                   "empty (nothing removed; run the spec with this shimmer first)");
   p.jobs = doomed.size();
   std::vector<std::string> orphan_shots;
   std::vector<BenchmarkCost> stale_costs;

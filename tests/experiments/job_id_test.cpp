@@ -276,6 +276,26 @@ TEST_F(JobIds, DryRunSaysWhyAndAStoreFromBeforeRerunsOnce) {
   EXPECT_FALSE(fs::exists(options.db_path));
 }
 
+// An external sequence's row is current while its id is today's: measured by
+// an older metrics code it is stale (the report leaves it out, prune drops
+// it) like a rendered row, instead of showing beside its re-measured twin.
+TEST(MetricsVersions, AnExternalRowOfAnOlderMetricsCodeIsNotCurrent) {
+  Job job;
+  job.variant = "engine";
+  job.derivatives = kExternalDerivatives;
+  job.external = ExternalFrames{"t", "r", "th", "rh", 0, ""};
+  JobResult now, before;
+  now.job = before.job = job;
+  now.id = JobId(job);
+  JobSources older;
+  older.metrics = "an older metrics code";
+  before.id = JobIdFrom(job, older);
+  ASSERT_NE(now.id, before.id);
+  const CurrentRowSet current = FindCurrentRows({now, before});
+  EXPECT_EQ(current.jobs, (std::set<std::string>{now.id}));
+  EXPECT_TRUE(current.costs.empty());  // no kernel of it is timed
+}
+
 TEST(MetricsVersions, OnlyRowsWithSparkleStatisticsCarryTheSparkleCodesVersion) {
   Job job;
   job.metrics.sparkle_threshold = 0;

@@ -71,25 +71,28 @@ const VariantSummary& Find(const std::vector<VariantSummary>& all, const std::st
 }
 
 // A store run with two versions of the code: the report keeps the current
-// rows and the external ones, and says how many it left out.
+// rows, an external sequence's as any other's (its id holds the metrics
+// code's version), and says how many it left out.
 TEST(ReportRows, RowsOfOlderCodeAreLeftOutWithANote) {
   std::vector<JobResult> rows;
   for (const char* id : {"old", "new-1", "new-2"}) {
     rows.push_back(MakeResult("tk19", 1, 2));
     rows.back().id = id;
   }
-  rows.push_back(MakeResult("none", 1, 2));
-  rows.back().id = "ext";
-  rows.back().job.external = ExternalFrames{};
+  for (const char* id : {"ext-old", "ext"}) {
+    rows.push_back(MakeResult("none", 1, 2));
+    rows.back().id = id;
+    rows.back().job.external = ExternalFrames{};
+  }
   std::string note;
-  const auto kept = CurrentRows(rows, {"new-1", "new-2"}, &note);
+  const auto kept = CurrentRows(rows, {"new-1", "new-2", "ext"}, &note);
   ASSERT_EQ(kept.size(), 3u);
   EXPECT_EQ(kept[0].id, "new-1");
-  EXPECT_TRUE(kept[2].job.external.has_value());
-  EXPECT_NE(note.find("holds 1 rows made by other code"), std::string::npos) << note;
+  EXPECT_EQ(kept[2].id, "ext");
+  EXPECT_NE(note.find("holds 2 rows made by other code"), std::string::npos) << note;
   // None of them current: all are shown, and the note says so.
   note.clear();
-  EXPECT_EQ(CurrentRows(rows, {"other"}, &note).size(), 4u);
+  EXPECT_EQ(CurrentRows(rows, {"other"}, &note).size(), 5u);
   EXPECT_NE(note.find("no row of the store"), std::string::npos) << note;
   // All current: nothing left out, no note.
   note.clear();

@@ -280,8 +280,9 @@ TEST(ResultStore, ShotChecksAndBenchmarksJoinTheirRowsAndMerge) {
   }
 }
 
-// A store run with two shading cores: prune keeps the current core's rows and
-// the external ones, the checks they refer to and the costs this core timed;
+// A store run with two shading cores: prune keeps the current core's rows
+// (an external sequence's row among them only while its id is current), the
+// checks they refer to and the costs this core timed;
 // a dry run counts the same and changes nothing; a store with no row of the
 // current core is refused untouched.
 TEST(ResultStore, PruneRemovesOlderCoresRowsChecksAndCosts) {
@@ -295,6 +296,8 @@ TEST(ResultStore, PruneRemovesOlderCoresRowsChecksAndCosts) {
   external.job.external = ExternalFrames{"t", "r", "th", "rh", 0, ""};
   external.job.derivatives = kExternalDerivatives;
   external.core_version = "aaaa", external.id = "ext", external.reference_id = "ref-ext";
+  JobResult old_external = external;  // measured by an older metrics code
+  old_external.id = "ext-old";
   ShotCheck kept_shot, old_shot;
   kept_shot.reference_id = current.reference_id;
   old_shot.reference_id = "ref-old";
@@ -308,30 +311,30 @@ TEST(ResultStore, PruneRemovesOlderCoresRowsChecksAndCosts) {
   {
     auto store = ResultStore::Open(path);
     ASSERT_TRUE(store) << store.error();
-    for (const JobResult& r : {current, old_a, old_b, external}) ASSERT_TRUE((*store)->Insert(r));
+    for (const JobResult& r : {current, old_a, old_b, external, old_external}) ASSERT_TRUE((*store)->Insert(r));
     ASSERT_TRUE((*store)->InsertShot(kept_shot));
     ASSERT_TRUE((*store)->InsertShot(old_shot));
     ASSERT_TRUE((*store)->InsertBenchmarks({timed_now, timed_before}));
   }
   auto store = ResultStore::Open(path);
   ASSERT_TRUE(store);
-  const std::set<std::string> current_jobs{current.id}, current_costs{"kernels-now"};
+  const std::set<std::string> current_jobs{current.id, external.id}, current_costs{"kernels-now"};
   const auto dry = (*store)->PruneStale(current_jobs, current_costs, /*dry_run=*/true);
   ASSERT_TRUE(dry) << dry.error();
-  EXPECT_EQ(dry->jobs, 2u);
+  EXPECT_EQ(dry->jobs, 3u);
   EXPECT_EQ(dry->shots, 1u);
   EXPECT_EQ(dry->benchmarks, 1u);
   EXPECT_EQ(dry->kept_jobs, 2u);
   EXPECT_EQ(dry->kept_external, 1u);
-  EXPECT_EQ((*store)->All()->size(), 4u);  // the dry run changed nothing
+  EXPECT_EQ((*store)->All()->size(), 5u);  // the dry run changed nothing
   // Refused when no job of the store is current: nothing removed.
   const auto refused = (*store)->PruneStale({"cccc"}, current_costs, false);
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().find("nothing removed"), std::string::npos) << refused.error();
-  EXPECT_EQ((*store)->All()->size(), 4u);
+  EXPECT_EQ((*store)->All()->size(), 5u);
   const auto pruned = (*store)->PruneStale(current_jobs, current_costs, false);
   ASSERT_TRUE(pruned) << pruned.error();
-  EXPECT_EQ(pruned->jobs, 2u);
+  EXPECT_EQ(pruned->jobs, 3u);
   std::set<std::string> ids;
   const auto left = (*store)->All();
   ASSERT_TRUE(left);

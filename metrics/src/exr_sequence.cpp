@@ -135,72 +135,66 @@ FrameCheck CheckFrame(const fs::path& frame, const ExrSequence& seq) {
   return {std::nullopt, HasMotion(*layers), HasStderr(*layers)};
 }
 
-// One layer's luminance (and motion) from an open file.
-Result<LuminanceFrame> ReadLayer(const ExrInput& in, const fs::path& file, const std::string& layer, int width,
-                                 int height, bool with_motion, bool with_stderr = false) {
-  using R = Result<LuminanceFrame>;
+// One layer's luminance (and motion) from an open file into `frame`.
+Status ReadLayer(const ExrInput& in, const fs::path& file, const std::string& layer, int width, int height,
+                 bool with_motion, bool with_stderr, FrameScratch& scratch, LuminanceFrame& frame) {
   LayerMap layers = MapLayers(in);
   auto it = layers.find(layer);
   if (it == layers.end() || !HasLuminance(it->second))
-    return R::Failure(file.string() + ": no layer '" + layer +
-                      "' with R,G,B (layers: " + Join(LuminanceLayers(layers)) + ")");
+    return Status::Failure(file.string() + ": no layer '" + layer +
+                           "' with R,G,B (layers: " + Join(LuminanceLayers(layers)) + ")");
   const auto& components = it->second;
   const bool rgb = components.count("R") && components.count("G") && components.count("B");
-  if (with_motion && !HasMotion(layers)) return R::Failure(file.string() + ": no motion.X/motion.Y channels");
-  if (with_stderr && !HasStderr(layers)) return R::Failure(file.string() + ": no stderr.Y channel");
+  if (with_motion && !HasMotion(layers)) return Status::Failure(file.string() + ": no motion.X/motion.Y channels");
+  if (with_stderr && !HasStderr(layers)) return Status::Failure(file.string() + ": no stderr.Y channel");
 
-  // Component planes to fill, grouped by part below.
+  // Component planes to fill, grouped by part below. A luminance channel Y
+  // and stderr.Y go straight into the frame.
   std::vector<std::pair<ChannelRef, cv::Mat*>> wanted;
-  cv::Mat r(height, width, CV_32F), g, b, mx, my, se;
   if (rgb) {
-    g.create(height, width, CV_32F);
-    b.create(height, width, CV_32F);
-    wanted = {{components.at("R"), &r}, {components.at("G"), &g}, {components.at("B"), &b}};
+    wanted = {{components.at("R"), &scratch.r}, {components.at("G"), &scratch.g}, {components.at("B"), &scratch.b}};
   } else {
-    wanted = {{components.at("Y"), &r}};
+    wanted = {{components.at("Y"), &frame.luminance}};
   }
   if (with_motion) {
-    mx.create(height, width, CV_32F);
-    my.create(height, width, CV_32F);
-    wanted.push_back({layers.at("motion").at("X"), &mx});
-    wanted.push_back({layers.at("motion").at("Y"), &my});
+    wanted.push_back({layers.at("motion").at("X"), &scratch.motion_x});
+    wanted.push_back({layers.at("motion").at("Y"), &scratch.motion_y});
   }
-  if (with_stderr) {
-    se.create(height, width, CV_32F);
-    wanted.push_back({layers.at("stderr").at("Y"), &se});
-  }
+  if (with_stderr) wanted.push_back({layers.at("stderr").at("Y"), &frame.stderr_y});
+  for (auto& [ref, plane] : wanted) plane->create(height, width, CV_32F);
   std::set<int> parts;
   for (const auto& w : wanted) parts.insert(w.first.part);
   for (int p : parts) {
     const ExrPartInfo& part = in.parts()[p];
-    if (part.deep) return R::Failure(file.string() + ": deep EXR images are not supported");
+    if (part.deep) return Status::Failure(file.string() + ": deep EXR images are not supported");
     if (part.width != width || part.height != height)
-      return R::Failure(file.string() + ": frame is " + std::to_string(part.width) + "x" + std::to_string(part.height) +
-                        ", expected " + std::to_string(width) + "x" + std::to_string(height));
+      return Status::Failure(file.string() + ": frame is " + std::to_string(part.width) + "x" +
+                             std::to_string(part.height) + ", expected " + std::to_string(width) + "x" +
+                             std::to_string(height));
     std::vector<ExrPlaneRequest> requests;
     for (const auto& [ref, plane] : wanted) {
       if (ref.part != p) continue;
       for (const ExrChannelInfo& c : part.channels)
         if (c.name == ref.name && (c.x_sampling != 1 || c.y_sampling != 1))
-          return R::Failure(file.string() + ": channel " + ref.name + " is subsampled; not supported");
+          return Status::Failure(file.string() + ": channel " + ref.name + " is subsampled; not supported");
       requests.push_back({ref.name, plane->ptr<float>()});
     }
-    if (Status read = in.Read(p, requests); !read) return R::Failure(read.error());
+    if (Status read = in.Read(p, requests); !read) return read;
   }
-  LuminanceFrame frame;
   if (rgb) {
     frame.luminance.create(height, width, CV_32F);
     for (int y = 0; y < height; ++y) {
-      const float *pr = r.ptr<float>(y), *pg = g.ptr<float>(y), *pb = b.ptr<float>(y);
+      const float *pr = scratch.r.ptr<float>(y), *pg = scratch.g.ptr<float>(y), *pb = scratch.b.ptr<float>(y);
       float* out = frame.luminance.ptr<float>(y);
       for (int x = 0; x < width; ++x) out[x] = static_cast<float>(kLumaR * pr[x] + kLumaG * pg[x] + kLumaB * pb[x]);
     }
-  } else {
-    frame.luminance = r;
   }
-  if (with_motion) cv::merge(std::vector<cv::Mat>{mx, my}, frame.motion);
-  frame.stderr_y = se;
-  return frame;
+  if (with_motion)
+    cv::merge(std::vector<cv::Mat>{scratch.motion_x, scratch.motion_y}, frame.motion);
+  else
+    frame.motion.release();
+  if (!with_stderr) frame.stderr_y.release();
+  return Ok();
 }
 
 // A renderer that stopped (or is still going) says so in its sequence.json;
@@ -302,11 +296,20 @@ Result<ExrSequence> OpenSequence(const fs::path& path, const SequenceRequest& re
   return seq;
 }
 
+Status ReadFrameInto(const fs::path& file, const std::string& layer, int width, int height, bool with_motion,
+                     bool with_stderr, FrameScratch& scratch, LuminanceFrame& frame) {
+  auto in = ExrInput::Open(file, /*whole_file=*/true);
+  if (!in) return in.failure();
+  return ReadLayer(*in, file, layer, width, height, with_motion, with_stderr, scratch, frame);
+}
+
 Result<LuminanceFrame> ReadFrame(const fs::path& file, const std::string& layer, int width, int height,
                                  bool with_motion, bool with_stderr) {
-  auto in = ExrInput::Open(file, /*whole_file=*/true);
-  if (!in) return Result<LuminanceFrame>::Failure(in.error());
-  return ReadLayer(*in, file, layer, width, height, with_motion, with_stderr);
+  FrameScratch scratch;
+  LuminanceFrame frame;
+  if (Status read = ReadFrameInto(file, layer, width, height, with_motion, with_stderr, scratch, frame); !read)
+    return read.failure();
+  return frame;
 }
 
 Result<cv::Mat> ReadMask(const fs::path& file, int width, int height) {
@@ -327,9 +330,11 @@ Result<cv::Mat> ReadMask(const fs::path& file, int width, int height) {
       if (l == kBeautyLayer) layer = l;
     if (layer.empty()) return R::Failure(file.string() + ": mask EXR has no R,G,B or Y channels");
     const FrameSize size = SizeOf(in->parts().front());
-    auto frame = ReadLayer(*in, file, layer, size.width, size.height, false);
-    if (!frame) return R::Failure(frame.error());
-    image = frame->luminance;
+    FrameScratch scratch;
+    LuminanceFrame frame;
+    if (Status read = ReadLayer(*in, file, layer, size.width, size.height, false, false, scratch, frame); !read)
+      return R::Failure(read.error());
+    image = frame.luminance;
   } else {
     image = cv::imread(file.string(), cv::IMREAD_UNCHANGED | cv::IMREAD_ANYDEPTH);
     if (image.empty()) return R::Failure(file.string() + ": not an image OpenCV can read");

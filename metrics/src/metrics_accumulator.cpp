@@ -16,8 +16,11 @@ namespace {
 // Rousselle et al. 2011, with 0.01 as docs/metrics.md defines it).
 using detail::kRelMseEpsilon;
 
-// Per (frame block, region pixel): the sums TileBlockStatistics::CellSum names.
-constexpr int kCellSums = TileBlockStatistics::kCellSums;
+// Per (frame block, region pixel): a pixel's first moments
+// (TileBlockStatistics::PixelSum); per (tile, frame block): the sums that
+// enter a tile linearly (SquareSum).
+constexpr int kPixelSums = TileBlockStatistics::kPixelSums;
+constexpr int kSquareSums = TileBlockStatistics::kSquareSums;
 
 // Per-row partial sums of one frame: rows are the unit of parallel work, so
 // summing them in row order afterwards keeps results independent of threading.
@@ -86,7 +89,11 @@ MetricsAccumulator::MetricsAccumulator(const AccumulatorSetup& setup)
     block_length_ = FrameBlockLength(setup.frames);
     for (int t = 0; t < setup.frames; t += block_length_)
       block_frames_.push_back(std::min(block_length_, setup.frames - t));
-    cells_.assign(block_frames_.size() * region_indices_.size() * kCellSums, 0.f);
+    cells_.assign(block_frames_.size() * region_indices_.size() * kPixelSums, 0.f);
+    const int tile = setup.bootstrap.tile;
+    tiles_x_ = (setup.width + tile - 1) / tile;
+    const int tiles_y = (setup.height + tile - 1) / tile;
+    squares_.assign(static_cast<size_t>(tiles_x_) * tiles_y * kSquareSums * block_frames_.size(), 0.0);
     shifts_.assign(2 * region_indices_.size(), 0.f);
     joint_.assign(3 * region_indices_.size(), 0.0);
     if (setup.reference_stderr) {
@@ -123,44 +130,57 @@ MetricsAccumulator::SparkleTracks MetricsAccumulator::TracksOf(const cv::Mat& mo
 }
 
 // The bootstrap cells, relMSE's joint sums and the reference noise's sums of
-// row y's updated pixels (with a reference).
+// row y's updated pixels (with a reference): a pixel's first moments into
+// `block_cells`, the sums that enter its tile linearly into that tile's
+// row of `block` in squares_, one tile's run of pixels at a time.
 void MetricsAccumulator::AddCellRow(int y, const float* tv_row, const float* rv_row, const float* se_row,
-                                    const detail::PixelRowTerms& terms, float* block_cells) {
+                                    const detail::PixelRowTerms& terms, float* block_cells, int block) {
   const size_t row = static_cast<size_t>(y) * setup_.width;
-  for (int x = 0; x < setup_.width; ++x) {
-    if (!terms.updated[x]) continue;
-    const size_t i = row + x;
-    const double tv = tv_row[x], rv = rv_row[x];
-    const double e = tv - rv;
-    const int p = region_index_[i];
-    if (frames_added_ == 0) {
-      shifts_[2 * p] = static_cast<float>(tv);
-      shifts_[2 * p + 1] = static_cast<float>(rv);
+  const int tile = setup_.bootstrap.tile;
+  const size_t blocks = block_frames_.size();
+  using S = TileBlockStatistics;
+  for (int x0 = 0; x0 < setup_.width; x0 += tile) {
+    double squares[kSquareSums] = {};
+    bool any = false;
+    for (int x = x0; x < std::min(x0 + tile, setup_.width); ++x) {
+      if (!terms.updated[x]) continue;
+      any = true;
+      const size_t i = row + x;
+      const double tv = tv_row[x], rv = rv_row[x];
+      const double e = tv - rv;
+      const int p = region_index_[i];
+      if (frames_added_ == 0) {
+        shifts_[2 * p] = static_cast<float>(tv);
+        shifts_[2 * p + 1] = static_cast<float>(rv);
+      }
+      const double dt = tv - shifts_[2 * p], dr = rv - shifts_[2 * p + 1], de = dt - dr;
+      const double denominator = rv * rv + kRelMseEpsilon;
+      const double w = 1 / denominator;
+      float* cell = block_cells + static_cast<size_t>(p) * kPixelSums;
+      cell[S::kPixelT] += static_cast<float>(dt);
+      cell[S::kPixelR] += static_cast<float>(dr);
+      cell[S::kPixelWeight] += static_cast<float>(w);
+      cell[S::kPixelWeightedE] += static_cast<float>(w * de);
+      squares[S::kSquareSumT] += dt * dt;
+      squares[S::kSquareSumR] += dr * dr;
+      squares[S::kSquareSumE] += de * de;
+      squares[S::kSquareRelative] += terms.relative2[x];  // e^2 / denominator
+      squares[S::kSquareWeightedE2] += w * de * de;
+      double* joint = joint_.data() + 3 * static_cast<size_t>(p);
+      joint[0] += w, joint[1] += w * e, joint[2] += w * e * e;
+      if (se_row && std::isfinite(se_row[x])) {
+        const double s2 = double(se_row[x]) * se_row[x];
+        noise_[p] += s2;
+        weighted_noise_[p] += w * s2;
+        // d/dR of E^2 / (R^2 + eps), with E = T - R (the delta method).
+        const double slope = -2 * e / denominator - 2 * rv * e * e / (denominator * denominator);
+        relmse_noise_[p] += slope * slope * s2;
+      }
     }
-    const double dt = tv - shifts_[2 * p], dr = rv - shifts_[2 * p + 1], de = dt - dr;
-    const double denominator = rv * rv + kRelMseEpsilon;
-    const double w = 1 / denominator;
-    using S = TileBlockStatistics;
-    float* cell = block_cells + static_cast<size_t>(p) * kCellSums;
-    cell[S::kSumT] += static_cast<float>(dt);
-    cell[S::kSumR] += static_cast<float>(dr);
-    cell[S::kSquareT] += static_cast<float>(dt * dt);
-    cell[S::kSquareR] += static_cast<float>(dr * dr);
-    cell[S::kSquareE] += static_cast<float>(de * de);
-    cell[S::kRelative] += static_cast<float>(terms.relative2[x]);  // e^2 / denominator
-    cell[S::kWeight] += static_cast<float>(w);
-    cell[S::kWeightedE] += static_cast<float>(w * de);
-    cell[S::kWeightedE2] += static_cast<float>(w * de * de);
-    double* joint = joint_.data() + 3 * static_cast<size_t>(p);
-    joint[0] += w, joint[1] += w * e, joint[2] += w * e * e;
-    if (se_row && std::isfinite(se_row[x])) {
-      const double s2 = double(se_row[x]) * se_row[x];
-      noise_[p] += s2;
-      weighted_noise_[p] += w * s2;
-      // d/dR of E^2 / (R^2 + eps), with E = T - R (the delta method).
-      const double slope = -2 * e / denominator - 2 * rv * e * e / (denominator * denominator);
-      relmse_noise_[p] += slope * slope * s2;
-    }
+    if (!any) continue;
+    const size_t t = static_cast<size_t>(y / tile) * tiles_x_ + x0 / tile;
+    double* tile_row = squares_.data() + t * kSquareSums * blocks;
+    for (int kind = 0; kind < kSquareSums; ++kind) tile_row[kind * blocks + block] += squares[kind];
   }
 }
 
@@ -174,14 +194,16 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
   if (with_stderr) ++stderr_frames_;
   const size_t region_count = region_indices_.size();
   const int block = has_ref ? std::min(frames_added_ / block_length_, static_cast<int>(block_frames_.size()) - 1) : 0;
-  float* block_cells = has_ref ? cells_.data() + static_cast<size_t>(block) * region_count * kCellSums : nullptr;
+  float* block_cells = has_ref ? cells_.data() + static_cast<size_t>(block) * region_count * kPixelSums : nullptr;
   const int width = setup_.width, height = setup_.height;
   const bool has_previous = frames_added_ > 0;
   std::vector<RowSums> rows(height);
-  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& range) {
+  // In whole tile rows, so that one thread adds to a tile's squares_.
+  const int tile = setup_.bootstrap.tile;
+  cv::parallel_for_(cv::Range(0, (height + tile - 1) / tile), [&](const cv::Range& range) {
     std::vector<double> row_terms(4 * static_cast<size_t>(width));
     std::vector<uint8_t> updated(width);
-    for (int y = range.start; y < range.end; ++y) {
+    for (int y = range.start * tile; y < std::min(range.end * tile, height); ++y) {
       const size_t row = static_cast<size_t>(y) * width;
       const float* tv_row = T.ptr<float>(y);
       const float* rv_row = has_ref ? Rf.ptr<float>(y) : nullptr;
@@ -221,7 +243,9 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
         sparkle_test_.AddRow(y, tv_row, in.region, tracks.test ? tracks.test->ptr<cv::Vec2f>(y) : nullptr);
         if (has_ref) sparkle_ref_.AddRow(y, rv_row, in.region, tracks.reference ? tracks.reference->ptr<cv::Vec2f>(y) : nullptr);
       }
-      if (has_ref) AddCellRow(y, tv_row, rv_row, with_stderr ? reference_stderr.ptr<float>(y) : nullptr, terms, block_cells);
+      if (has_ref)
+        AddCellRow(y, tv_row, rv_row, with_stderr ? reference_stderr.ptr<float>(y) : nullptr, terms, block_cells,
+                   block);
     }
   });
 
@@ -255,12 +279,22 @@ void MetricsAccumulator::AddIntervals(MetricsReport* report, const cv::Mat& good
   TileBlockStatistics cells(block_frames_);
   const std::vector<double>& flicker_power = spectrum_.pixel_weighted_power();
   const std::vector<int>& flicker_segments = spectrum_.pixel_segments();
-  std::vector<float> sums(static_cast<size_t>(kCellSums) * blocks);
+  std::vector<float> sums(static_cast<size_t>(kPixelSums) * blocks);
   double noise = 0, relmse_noise = 0, weighted_noise = 0;
   long long used = 0;
   // Only tiles that intersect the good region, each weighted by its pixels.
+  // A tile with a pixel that turned non-finite after its first sample is
+  // left out: that pixel's earlier samples are in the tile's squares_.
   for (int ty = 0; ty < setup_.height; ty += tile)
     for (int tx = 0; tx < setup_.width; tx += tile) {
+      bool tainted = false;
+      for (int y = ty; y < std::min(ty + tile, setup_.height); ++y)
+        for (int x = tx; x < std::min(tx + tile, setup_.width); ++x) {
+          const size_t i = static_cast<size_t>(y) * setup_.width + x;
+          if (setup_.region.at<uint8_t>(y, x) && !good.at<uint8_t>(y, x) && moments_test_.count(i) > 0)
+            tainted = true;
+        }
+      if (tainted) continue;
       int index = -1;
       for (int y = ty; y < std::min(ty + tile, setup_.height); ++y)
         for (int x = tx; x < std::min(tx + tile, setup_.width); ++x) {
@@ -268,10 +302,10 @@ void MetricsAccumulator::AddIntervals(MetricsReport* report, const cv::Mat& good
           const int p = region_index_[static_cast<size_t>(y) * setup_.width + x];
           if (index < 0) index = cells.AddTile();
           for (int k = 0; k < blocks; ++k)
-            for (int s = 0; s < kCellSums; ++s)
-              sums[s * blocks + k] = cells_[(static_cast<size_t>(k) * region_count + p) * kCellSums + s];
-          cells.AddPixel(index, shifts_[2 * p], shifts_[2 * p + 1], sums.data(), flicker_power[p],
-                         flicker_segments[p]);
+            for (int s = 0; s < kPixelSums; ++s)
+              sums[s * blocks + k] = cells_[(static_cast<size_t>(k) * region_count + p) * kPixelSums + s];
+          cells.AddPixelMeans(index, shifts_[2 * p], shifts_[2 * p + 1], sums.data(), flicker_power[p],
+                              flicker_segments[p]);
           if (!noise_.empty()) {
             noise += noise_[p];
             relmse_noise += relmse_noise_[p];
@@ -279,6 +313,10 @@ void MetricsAccumulator::AddIntervals(MetricsReport* report, const cv::Mat& good
           }
           ++used;
         }
+      if (index >= 0) {
+        const size_t t = static_cast<size_t>(ty / tile) * tiles_x_ + tx / tile;
+        cells.AddTileSquares(index, squares_.data() + t * kSquareSums * blocks);
+      }
     }
 
   TileBlockStatistics::Estimates point;

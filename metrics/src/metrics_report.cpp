@@ -1,5 +1,6 @@
 #include "shimmer/metrics/metrics_report.h"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -127,31 +128,31 @@ Result<cv::Mat> MeasuredRegion(const MetricsOptions& options, const OpenedSequen
 // (its chunks decoded in parallel) while this one is computed. Both run as
 // tasks of the one TBB pool that OpenCV's parallel_for_ uses too: a separate
 // reader thread would oversubscribe the cores (measured 15 % slower on 2
-// cores than not overlapping at all).
+// cores than not overlapping at all). Pairs are read into a ring of three
+// whose planes are reused: frame t is computed while t + 1 is read, and the
+// observer may still be shown t - 1.
 Status AccumulateFrames(const OpenedSequences& seq, const AccumulatorSetup& setup, bool reference_motion,
                         const FrameObserver& observer, MetricsAccumulator* accumulator) {
   const ExrSequence& test = seq.test;
   const bool has_ref = setup.has_reference;
   const int frames = setup.frames, width = setup.width, height = setup.height;
-  auto read = [&](int t) -> Result<FramePair> {
-    FramePair pair;
-    auto tf = ReadFrame(test.frames[t], test.layer, width, height, setup.with_motion);
-    if (!tf) return tf.failure();
-    pair.test = std::move(*tf);
-    if (has_ref) {
-      auto rf = ReadFrame(seq.reference->frames[t], seq.reference->layer, width, height, reference_motion,
-                          setup.reference_stderr);
-      if (!rf) return rf.failure();
-      pair.reference = std::move(*rf);
-    }
-    return pair;
+  FrameScratch scratch;  // only the reading task uses it, one read at a time
+  std::array<FramePair, 3> ring;
+  auto read = [&](int t) -> Status {
+    FramePair& pair = ring[t % 3];
+    if (Status s = ReadFrameInto(test.frames[t], test.layer, width, height, setup.with_motion, false, scratch,
+                                 pair.test);
+        !s)
+      return s;
+    if (!has_ref) return Ok();
+    return ReadFrameInto(seq.reference->frames[t], seq.reference->layer, width, height, reference_motion,
+                         setup.reference_stderr, scratch, pair.reference);
   };
 
-  FramePair previous;
-  Result<FramePair> current = read(0);
+  Status current = read(0);
   for (int t = 0; t < frames; ++t) {
-    if (!current) return current.failure();
-    std::optional<Result<FramePair>> upcoming;
+    if (!current) return current;
+    Status upcoming = Ok();
     tbb::task_group reading;
     // The read writes into `upcoming`; wait for it on every way out of this iteration.
     struct WaitOnExit {
@@ -159,18 +160,19 @@ Status AccumulateFrames(const OpenedSequences& seq, const AccumulatorSetup& setu
       ~WaitOnExit() { group.wait(); }
     } wait_on_exit{reading};
     if (t + 1 < frames) reading.run([&, t] { upcoming = read(t + 1); });
-    const cv::Mat& T = current->test.luminance;
-    const cv::Mat& Rf = current->reference.luminance;
-    accumulator->AddFrame(T, Rf, current->test.motion, test.frames[t].string(),
-                          has_ref ? seq.reference->frames[t].string() : std::string(), current->reference.stderr_y,
-                          current->reference.motion);
+    const FramePair& pair = ring[t % 3];
+    const cv::Mat& T = pair.test.luminance;
+    const cv::Mat& Rf = pair.reference.luminance;
+    accumulator->AddFrame(T, Rf, pair.test.motion, test.frames[t].string(),
+                          has_ref ? seq.reference->frames[t].string() : std::string(), pair.reference.stderr_y,
+                          pair.reference.motion);
     if (observer) {
-      Status s = observer(ObservedFrame{t, test.fps, has_ref, T, has_ref ? Rf : (t > 0 ? previous.test.luminance : T)});
+      const cv::Mat& previous = t > 0 ? ring[(t + 2) % 3].test.luminance : T;
+      Status s = observer(ObservedFrame{t, test.fps, has_ref, T, has_ref ? Rf : previous});
       if (!s) return s;
     }
     reading.wait();
-    previous = std::move(*current);
-    if (upcoming) current = std::move(*upcoming);
+    current = std::move(upcoming);
   }
   return Ok();
 }

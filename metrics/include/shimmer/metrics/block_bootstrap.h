@@ -132,8 +132,22 @@ class TileBlockStatistics {
   };
   // One pixel: its first-frame values t0, r0, its per-block sums, and
   // `flicker_power` and `flicker_segments`: its Watson-weighted spectral
-  // power summed over its segments, and their count.
+  // power summed over its segments, and their count. The same as
+  // AddPixelMeans with its kSumT, kSumR, kWeight and kWeightedE and
+  // AddTileSquares with the other five.
   void AddPixel(int tile, double t0, double r0, const float* sums, double flicker_power, double flicker_segments);
+
+  // A pass need not keep all nine sums per pixel: only those that multiply
+  // the pixel's own temporal mean (its first moments, PixelSum) are needed
+  // per pixel; the rest enter a tile's row linearly and may be summed over
+  // the tile as they come (SquareSum).
+  enum PixelSum { kPixelT, kPixelR, kPixelWeight, kPixelWeightedE, kPixelSums };
+  enum SquareSum { kSquareSumT, kSquareSumR, kSquareSumE, kSquareRelative, kSquareWeightedE2, kSquareSums };
+  // One pixel's first moments per block, kind-major: sums[kind * blocks() + k].
+  void AddPixelMeans(int tile, double t0, double r0, const float* sums, double flicker_power,
+                     double flicker_segments);
+  // A tile's linear sums over its pixels, kind-major: sums[kind * blocks() + k].
+  void AddTileSquares(int tile, const double* sums);
 
   struct Estimates {
     double tv_test = 0, tv_ref = 0, tv_err = 0;

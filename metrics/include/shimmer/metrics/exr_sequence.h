@@ -55,6 +55,20 @@ struct LuminanceFrame {
 Result<LuminanceFrame> ReadFrame(const std::filesystem::path& file, const std::string& layer, int width, int height,
                                  bool with_motion, bool with_stderr = false);
 
+// The planes a frame's channels are decoded into before they are combined
+// (R, G, B into luminance; motion.X, motion.Y into one two-channel plane).
+struct FrameScratch {
+  cv::Mat r, g, b, motion_x, motion_y;
+};
+
+// ReadFrame into `frame`, whose planes (and `scratch`'s) are reused where
+// their size and type already fit: a pass reads every frame of a sequence at
+// one size, and fresh planes for each cost page faults that, at 1080p, took
+// longer than the arithmetic on them (bench/metrics_bench). `frame`'s planes
+// must not be shared with anything that still reads them.
+Status ReadFrameInto(const std::filesystem::path& file, const std::string& layer, int width, int height,
+                     bool with_motion, bool with_stderr, FrameScratch& scratch, LuminanceFrame& frame);
+
 // Any single-channel image used as a mask (EXR or anything OpenCV reads):
 // nonzero = inside. Returned as CV_8U 0/1.
 Result<cv::Mat> ReadMask(const std::filesystem::path& file, int width, int height);

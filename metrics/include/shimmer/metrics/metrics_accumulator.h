@@ -80,15 +80,20 @@ class MetricsAccumulator {
   };
   SparkleTracks TracksOf(const cv::Mat& motion, const cv::Mat& reference_motion);
   void AddCellRow(int y, const float* test_row, const float* reference_row, const float* stderr_row,
-                  const detail::PixelRowTerms& terms, float* block_cells);
+                  const detail::PixelRowTerms& terms, float* block_cells, int block);
 
-  // The bootstrap's per-pixel, per-frame-block sums (with a reference):
-  // kCellSums floats per (block, region pixel), block-major.
+  // The bootstrap's sums (with a reference): per (block, region pixel),
+  // block-major, a pixel's first moments (kPixelSums floats); per (tile,
+  // block), tile-major, the sums that enter a tile linearly (kSquareSums
+  // doubles, kind-major within a tile). Nine floats per pixel and block
+  // were a quarter of a 1080p pass's memory.
   void AddIntervals(MetricsReport* report, const cv::Mat& good, double reference_sum) const;
   std::vector<int> region_index_;  // row-major pixel -> index in region_indices_, -1 outside
   int block_length_ = 0;
   std::vector<int> block_frames_;
   HugePageVector<float> cells_;
+  HugePageVector<double> squares_;
+  int tiles_x_ = 0;
   std::vector<float> shifts_;  // (t0, r0) per region pixel
   // Per region pixel, in double: sum_t w, sum_t w E, sum_t w E^2 with
   // w = 1 / (R^2 + eps), for relmse's temporal/spatial split.

@@ -175,58 +175,48 @@ def main(json_dir, out_path):
 
     # The stage benchmarks: cut-down copies of the kernel, each cutting one
     # more part; a part's cost is the difference between two rows.
-    def stage_rows(kind, full, cuts, cost):
-        """(label, value, part cut, part's value) per row; None without the stage rows."""
+    def stage_table(kind, full, cuts, cost, heading, intro, unit, share_of, rest):
+        """The table of one kind's stages (nothing without its stage rows)."""
         values = [(f"the whole {kind}", full)]
         for name, _ in cuts:
             row = next((r for n, r in renderer.items() if n.startswith(f"stages/{kind}/{name}/")), None)
             values.append((f"`{name}`", cost(row)))
         if any(v is None for _, v in values):
-            return None
-        out = []
+            return []
+        out = [heading, "", intro, "",
+               f"| kernel | {unit}/{kind if kind == 'frame' else 'sample'} | part cut | its {unit} | "
+               f"share of {share_of} |", "|---|---:|---|---:|---:|"]
         for i, (label, value) in enumerate(values):
-            part = cuts[i - 1][1] if i > 0 else None
-            out.append((label, value, part, None if i == 0 else values[i - 1][1] - value))
-        return out
+            if i == 0:
+                out.append(f"| {label} | {fmt(value)} |  |  |  |")
+                continue
+            part = values[i - 1][1] - value
+            out.append(f"| {label} | {fmt(value)} | {cuts[i - 1][1]} | {fmt(part)} | {100 * part / full:.0f} % |")
+        left = values[-1][1]
+        return out + ["", f"What is left ({fmt(left)} {unit}, {100 * left / full:.0f} %) is {rest}.", ""]
 
-    frame_cuts = [("no-aovs", "the AOV writes"), ("no-shading", "the variant's NDF and the BRDF"),
-                  ("no-footprint", "the quad exchange and the footprint"),
-                  ("no-trace", "the camera ray and the scene walk")]
-    frame_stages = stage_rows("frame", none_quad, frame_cuts, time_of)
-    if frame_stages:
-        lines += ["## Where a 1-spp frame's time goes", "",
-                  "`none`, quad derivatives, 512² `sphere-field`: copies of the kernel with one more part cut "
-                  "each (`stages/frame/*` of `renderer_bench`, interleaved with the rest); a part's cost is "
-                  "the difference of two rows, so rows within the noise of each other can differ by a "
-                  "negative amount.", "",
-                  "| kernel | ms/frame | part cut | its ms | share of the frame |", "|---|---:|---|---:|---:|"]
-        for label, value, part, cost in frame_stages:
-            lines.append(f"| {label} | {fmt(value)} | {part or ''} | {'' if cost is None else fmt(cost)} | "
-                         f"{'' if cost is None else f'{100 * cost / none_quad:.0f} %'} |")
-        rest = frame_stages[-1][1]
-        lines += ["", f"What is left ({fmt(rest)} ms, {100 * rest / none_quad:.0f} %) is the invocation, its "
-                  "pixel and the channel writes.", ""]
+    lines += stage_table(
+        "frame", none_quad,
+        [("no-aovs", "the AOV writes"), ("no-shading", "the variant's NDF and the BRDF"),
+         ("no-footprint", "the quad exchange and the footprint"), ("no-trace", "the camera ray and the scene walk")],
+        time_of, "## Where a 1-spp frame's time goes",
+        "`none`, quad derivatives, 512² `sphere-field`: copies of the kernel with one more part cut "
+        "each (`stages/frame/*` of `renderer_bench`, interleaved with the rest); a part's cost is "
+        "the difference of two rows, so rows within the noise of each other can differ by a "
+        "negative amount.", "ms", "the frame", "the invocation, its pixel and the channel writes")
 
     def ns_per_sample(row):
         return None if row is None or "error" in row or not row.get("Msamples_per_s") else 1e3 / row["Msamples_per_s"]
 
-    reference_cuts = [("no-shading", "the variant's NDF and the BRDF"),
-                      ("no-trace", "the trace against the pixel's candidates"),
-                      ("no-ray", "the sample's ray and its jitter's hashes")]
-    reference_stages = stage_rows("reference", ns_per_sample(reference), reference_cuts, ns_per_sample)
-    if reference_stages:
-        full = reference_stages[0][1]
-        lines += ["## Where a reference sample's time goes", "",
-                  "The 16×16 reference on the same shot, cut the same way (`stages/reference/*`), in "
-                  "nanoseconds per sample (the inverse of samples per second on all cores).", "",
-                  "| kernel | ns/sample | part cut | its ns | share of a sample |", "|---|---:|---|---:|---:|"]
-        for label, value, part, cost in reference_stages:
-            lines.append(f"| {label} | {fmt(value)} | {part or ''} | {'' if cost is None else fmt(cost)} | "
-                         f"{'' if cost is None else f'{100 * cost / full:.0f} %'} |")
-        rest = reference_stages[-1][1]
-        lines += ["", f"What is left ({fmt(rest)} ns, {100 * rest / full:.0f} %) is the loop, the pixel's "
-                  "candidate walk (once per pixel and replicate) and the replicate's running mean and writes.",
-                  ""]
+    lines += stage_table(
+        "reference", ns_per_sample(reference),
+        [("no-shading", "the variant's NDF and the BRDF"), ("no-trace", "the trace against the pixel's candidates"),
+         ("no-ray", "the sample's ray and its jitter's hashes")],
+        ns_per_sample, "## Where a reference sample's time goes",
+        "The 16×16 reference on the same shot, cut the same way (`stages/reference/*`), in "
+        "nanoseconds per sample (the inverse of samples per second on all cores).", "ns", "a sample",
+        "the loop, the pixel's candidate walk (once per pixel and replicate) and the replicate's running mean "
+        "and writes")
 
     lines += ["## Meshes", "",
               "The triangle BVH on the CPU (`build/bench/triangle_bvh_bench`, binned SAH, median of 3 "

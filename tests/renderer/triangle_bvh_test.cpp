@@ -143,33 +143,35 @@ int CompareWithBruteForce(const Mesh& mesh, const std::vector<Ray>& rays) {
 
 // The layout of triangle_bvh.h: depth-first, left child next, right child
 // after the left subtree, leaves of 1..4 triangles, every triangle with area
-// exactly once, and every box holding its children and triangles.
+// exactly once, and every box exactly the bounds of its children or corners.
 void CheckLayout(const Mesh& mesh, const TriangleBvh& bvh) {
   const std::vector<BvhNode>& nodes = bvh.nodes();
   std::vector<int> seen(mesh.indices.size() / 3, 0);
-  auto contains = [](const BvhNode& outer, const glm::vec3& lo, const glm::vec3& hi) {
-    return glm::all(glm::lessThanEqual(outer.lo, lo)) && glm::all(glm::lessThanEqual(hi, outer.hi));
-  };
   for (std::size_t i = 0; i < nodes.size(); ++i) {
     const BvhNode& n = nodes[i];
     if (n.count == 0) {
       ASSERT_LT(i + 1, nodes.size());
       ASSERT_GT(n.offset, i + 1);
       ASSERT_LT(n.offset, nodes.size());
-      EXPECT_TRUE(contains(n, nodes[i + 1].lo, nodes[i + 1].hi));
-      EXPECT_TRUE(contains(n, nodes[n.offset].lo, nodes[n.offset].hi));
+      // Tight: exactly its children's union (the build bounds a range by
+      // its split's bins, not by a scan of its triangles).
+      EXPECT_EQ(n.lo, glm::min(nodes[i + 1].lo, nodes[n.offset].lo)) << "node " << i;
+      EXPECT_EQ(n.hi, glm::max(nodes[i + 1].hi, nodes[n.offset].hi)) << "node " << i;
       continue;
     }
     ASSERT_LE(n.count, 4u);
+    glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
     for (std::uint32_t k = n.offset; k < n.offset + n.count; ++k) {
       const std::uint32_t t = bvh.triangle_order()[k];
       ++seen[t];
       for (int c = 0; c < 3; ++c) {
         const glm::vec3& v = bvh.triangle_vertices()[3 * k + c];
         EXPECT_EQ(v, mesh.positions[mesh.indices[3 * t + c]]);
-        EXPECT_TRUE(contains(n, v, v));
+        lo = glm::min(lo, v), hi = glm::max(hi, v);
       }
     }
+    EXPECT_EQ(n.lo, lo) << "leaf " << i;  // its corners' bounds, exactly
+    EXPECT_EQ(n.hi, hi) << "leaf " << i;
   }
   std::size_t zero = 0;
   for (std::size_t t = 0; t < seen.size(); ++t) {

@@ -123,9 +123,21 @@ const std::vector<std::pair<std::string, std::vector<Cut>>>& FrameStages() {
       {"no-footprint", {{"sh.specular = s.n + vec3(f.hpp, 0.0);", "sh.specular = s.n;"}}},
       // The scene walk and the camera ray: what is left is the invocation,
       // its pixel and the channel writes.
+      // The bounded primitives (the tile's list): the ray tests the planes
+      // alone.
+      {"planes-only",
+       {{"  SurfaceSample s = surfaceOfHit(traceTile(ray.o, ray.d), ray, light);",
+         "  SurfaceSample s = surfaceOfHit(unboundedHit(ray.o, ray.d), ray, light);"}}},
+      // The surface at the hit (position, normals, frame, light): the hit's
+      // distance and the ray stand in.
+      {"no-surface",
+       {{"  SurfaceSample s = surfaceOfHit(unboundedHit(ray.o, ray.d), ray, light);",
+         "  SurfaceSample s = missedSample(); s.t = unboundedHit(ray.o, ray.d).t; s.n = ray.d;"}}},
+      // The camera ray and the planes' test: what is left is the
+      // invocation, its pixel and the channel writes.
       {"no-trace",
-       {{"  SurfaceSample s = traceRay(ray, light);\n  if ((SCENE_FEATURES & SCENE_ROUGHNESS_MAPS) != 0) m = "
-         "materialAt(m, s);\n  ShadingFootprint f;",
+       {{"  SurfaceSample s = missedSample(); s.t = unboundedHit(ray.o, ray.d).t; s.n = ray.d;\n"
+         "  if ((SCENE_FEATURES & SCENE_ROUGHNESS_MAPS) != 0) m = materialAt(m, s);\n  ShadingFootprint f;",
          "  SurfaceSample s = missedSample();\n  ShadingFootprint f;"}}},
   };
   return *stages;

@@ -198,7 +198,10 @@ def main(json_dir, out_path):
     lines += stage_table(
         "frame", none_quad,
         [("no-aovs", "the AOV writes"), ("no-shading", "the variant's NDF and the BRDF"),
-         ("no-footprint", "the quad exchange and the footprint"), ("no-trace", "the camera ray and the scene walk")],
+         ("no-footprint", "the quad exchange and the footprint"),
+         ("planes-only", "the bounded primitives of the tile's list"),
+         ("no-surface", "the surface at the hit (normals, frame, light)"),
+         ("no-trace", "the camera ray and the planes' test")],
         time_of, "## Where a 1-spp frame's time goes",
         "`none`, quad derivatives, 512² `sphere-field`: copies of the kernel with one more part cut "
         "each (`stages/frame/*` of `renderer_bench`, interleaved with the rest); a part's cost is "

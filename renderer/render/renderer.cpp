@@ -14,6 +14,7 @@
 #include "kernel_inputs.h"
 #include "pipeline_cache.h"
 #include "test_hooks.h"
+#include "tile_lists.h"
 #include "variant_resolution.h"
 #include "vk.h"
 
@@ -126,8 +127,9 @@ struct Renderer::Impl {
   std::vector<glm::vec4> words;
   std::shared_ptr<vk::Context> ctx;
   std::shared_ptr<vk::ComputePipeline> pipeline;
-  std::unique_ptr<vk::Buffer> frame_buf, scene_buf, image_buf, counter_buf;
+  std::unique_ptr<vk::Buffer> frame_buf, scene_buf, image_buf, counter_buf, tile_buf;
   int band_rows = 0;  // rows the image buffer holds
+  bool walk_instead_of_tile_lists = false;  // the test hook
 
   // Band [y0, y0 + rows) between the image buffer (channel planes of
   // width x rows) and the frame's full-height planes.
@@ -146,13 +148,28 @@ struct Renderer::Impl {
 
   // `columns` x `rows` pixels in 8 x 8 workgroups.
   Status Dispatch(const gpu::Push& push, double* gpu_ms, int columns, int rows) {
-    vk::Buffer* bufs[] = {frame_buf.get(), scene_buf.get(), image_buf.get(), counter_buf.get()};
+    vk::Buffer* bufs[] = {frame_buf.get(), scene_buf.get(), image_buf.get(), counter_buf.get(), tile_buf.get()};
     auto bytes = std::as_bytes(std::span<const gpu::Push>(&push, 1));
     auto groups = [](int n) { return std::uint32_t((n + 7) / 8); };
     auto ms = ctx->Dispatch(*pipeline, bufs, bytes, groups(columns), groups(rows));
     if (!ms) return ms.failure();
     *gpu_ms += *ms;
     return ValidationStatus();
+  }
+
+  // The frame's tile lists (every round of a reference shares its camera),
+  // or, under the test hook, every tile's count -1: the BVH walk.
+  void UploadTileLists(int index) {
+    const std::span<std::int32_t> out(static_cast<std::int32_t*>(tile_buf->data()),
+                                      TileListWords(settings.width, settings.height));
+    if (walk_instead_of_tile_lists) {
+      const std::size_t tiles = out.size() / (2 + kMaxTilePrimitives);
+      for (std::size_t t = 0; t < tiles; ++t) out[2 * t] = 0, out[2 * t + 1] = -1;
+      return;
+    }
+    BuildTileLists(words, scene::CameraAt(settings.camera, settings.scene.rig, index, settings.fps, settings.width,
+                                          settings.height),
+                   settings.width, settings.height, out);
   }
 
   // With validation on, anything the layer reported fails the render: a
@@ -188,6 +205,7 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
   std::unique_ptr<Renderer> r(new Renderer());
   Impl& im = *r->impl_;
   im.settings = settings;
+  im.walk_instead_of_tile_lists = hooks.walk_instead_of_tile_lists;
   auto variant = ResolveVariant(settings);
   if (!variant) return variant.failure();
   im.variant = *variant;
@@ -215,7 +233,8 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
 
   const auto spec = KernelSpecialization(im.variant, settings);
   using vk::BufferKind;
-  const BufferKind kinds[] = {BufferKind::kUniform, BufferKind::kStorage, BufferKind::kStorage, BufferKind::kStorage};
+  const BufferKind kinds[] = {BufferKind::kUniform, BufferKind::kStorage, BufferKind::kStorage, BufferKind::kStorage,
+                              BufferKind::kStorage};
   PipelineTimes pipeline_times;
   auto pipeline =
       AcquirePipeline(*device, *spirv, spec, kinds, sizeof(gpu::Push), &pipeline_times, hooks.driver_specializes);
@@ -244,10 +263,12 @@ Result<std::unique_ptr<Renderer>> Renderer::Create(const RenderSettings& setting
   im.band_rows = std::min(hooks.band_rows > 0 ? std::min(hooks.band_rows, fitting_rows) : fitting_rows,
                           (settings.height + 7) / 8 * 8);
   const std::size_t bytes[] = {sizeof(gpu::FrameConstants), im.words.size() * sizeof(glm::vec4),
-                               std::size_t(im.band_rows) * row_bytes, 16};
-  std::unique_ptr<vk::Buffer>* slots[] = {&im.frame_buf, &im.scene_buf, &im.image_buf, &im.counter_buf};
-  const char* names[] = {"frame constants", "scene", "image band", "counter"};
-  for (int i = 0; i < 4; ++i) {
+                               std::size_t(im.band_rows) * row_bytes, 16,
+                               TileListWords(settings.width, settings.height) * sizeof(std::int32_t)};
+  std::unique_ptr<vk::Buffer>* slots[] = {&im.frame_buf, &im.scene_buf, &im.image_buf, &im.counter_buf,
+                                          &im.tile_buf};
+  const char* names[] = {"frame constants", "scene", "image band", "counter", "tile lists"};
+  for (int i = 0; i < 5; ++i) {
     auto b = im.ctx->CreateBuffer(bytes[i], kinds[i]);
     if (!b) return Prefixed(names[i], b.failure());
     *slots[i] = std::move(*b);
@@ -270,6 +291,7 @@ Result<Frame> Renderer::RenderFrame(int index) {
   const RenderSettings& s = im.settings;
   gpu::FrameConstants f = FrameConstantsOf(s, index);
   gpu::Push push = PushOf(im.variant, s, index);
+  im.UploadTileLists(index);
   const bool adaptive = im.variant.reference && s.reference_tolerance > 0;
   // A reference renders K replicates (rounds), an adaptive one then more
   // until every pixel is within the tolerance or max_rounds is reached. (N = 1

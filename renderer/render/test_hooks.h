@@ -21,6 +21,9 @@ struct TestHooks {
   // Kernel or shading-core GLSL files (by name, e.g. "ggx_rect.glsl") with
   // other text: how the job-id tests edit a shader without rebuilding.
   std::vector<std::pair<std::string, std::string>> source_overrides;
+  // Every tile walks the BVH instead of testing its list (tile_lists.h):
+  // the test that both give the same frames.
+  bool walk_instead_of_tile_lists = false;
 };
 
 class ScopedTestHooks {

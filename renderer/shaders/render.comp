@@ -61,6 +61,10 @@ layout(std140, binding = 0) uniform FrameBuf {
 layout(std430, binding = 1) readonly buffer SceneBuf { vec4 words[]; } scene;
 layout(std430, binding = 2) buffer ImageBuf { float values[]; } image;  // planar channels
 layout(std430, binding = 3) buffer CounterBuf { uint unconverged; } counter;
+// Per 8x8 tile (a workgroup), this frame: its list's first word and count,
+// then the lists of BVH nodes (leaves) whose boxes reach the tile's camera
+// rays (tile_lists.cpp); a count of -1 walks the BVH instead.
+layout(std430, binding = 4) readonly buffer TileBuf { int words[]; } tiles;
 
 layout(push_constant) uniform Push {
   vec4 params;   // the variant parameters' first four slots (VARIANT_PARAMS_FROM_SLOTS)
@@ -92,6 +96,51 @@ FilteredNdf variantAt(int variant, int ndf, vec2 alpha, ShadingFootprint f, Vari
 }
 
 #include "channels.glsl"
+
+// ---- tile lists ---------------------------------------------------------------
+// A pixel's primary ray tests its tile's listed leaves instead of walking
+// the BVH: the workgroup's invocations read one list, in one order, so a
+// SIMD batch runs as many steps as the list is long, where each lane's own
+// walk ran as many as its longest lane's. The leaves come in the walk's
+// order and take the walk's own per-leaf step, and every leaf a ray of the
+// tile can reach is listed, so the hit is traceScene's.
+
+int tileIndex() {
+  int tilesX = (frame.size.x + 7) / 8;
+  return ((int(gl_WorkGroupID.y) * 8 + frame.size.z) / 8) * tilesX + int(gl_WorkGroupID.x);
+}
+
+Hit traceTile(vec3 o, vec3 d) {
+  int tile = tileIndex();
+  int first = tiles.words[2 * tile];
+  int count = tiles.words[2 * tile + 1];
+  if (count < 0) return traceScene(o, d);
+  Hit hit = unboundedHit(o, d);
+  vec3 invD = inverseDirection(d);
+  for (int i = 0; i < count; i++) {
+    int node = tiles.words[first + i];
+    vec4 n0 = sceneWord(1 + 2 * node);
+    vec4 n1 = sceneWord(2 + 2 * node);
+    hit = withLeafHit(hit, o, d, n1, nodeEntered(o, invD, n0, n1, hit.t));
+  }
+  return hit;
+}
+
+// pixelCandidates over the tile's list.
+PixelCandidates tileCandidates(PixelCone k) {
+  int tile = tileIndex();
+  int first = tiles.words[2 * tile];
+  int count = tiles.words[2 * tile + 1];
+  if (count < 0) return pixelCandidates(k);
+  PixelCandidates l = unboundedCandidates();
+  for (int i = 0; i < count; i++) {
+    int node = tiles.words[first + i];
+    vec4 n0 = sceneWord(1 + 2 * node);
+    vec4 n1 = sceneWord(2 + 2 * node);
+    l = withLeafCandidate(l, k, n1, coneReachesNode(k, n0, n1));
+  }
+  return withLoadedPrims(l);
+}
 
 Camera loadCamera(CameraGpu g) {
   Camera c;
@@ -283,7 +332,7 @@ void shadePixelCentre(PixelLane pl, bool inside, int idx, Camera c, Camera prev,
   ivec2 px = pl.px;
   uint lane = pl.lane;
   Ray ray = cameraRay(c, pixelCentre(px));
-  SurfaceSample s = traceRay(ray, light);
+  SurfaceSample s = surfaceOfHit(traceTile(ray.o, ray.d), ray, light);
   if ((SCENE_FEATURES & SCENE_ROUGHNESS_MAPS) != 0) m = materialAt(m, s);
   ShadingFootprint f;
   // A normal-map filter reads the map with the pixel's uv footprint and
@@ -358,7 +407,7 @@ void shadePixelCentre(PixelLane pl, bool inside, int idx, Camera c, Camera prev,
 // has few candidates.
 SampleSums replicateSums(ivec2 px, Camera c, Light light, Material m, VariantParams vp) {
   const int samples = SPP_N * SPP_N;
-  PixelCandidates candidates = pixelCandidates(pixelCone(c, px));
+  PixelCandidates candidates = tileCandidates(pixelCone(c, px));
   bool fewCandidates = candidates.count <= PIXEL_CANDIDATES;
   const uint seed = pixelSeed(px);
   SampleSums sums = SampleSums(vec3(0.0), vec3(0.0));

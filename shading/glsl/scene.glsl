@@ -426,13 +426,14 @@ int meshHeaderOf(int index) { return int(sceneWord(scenePrimWord(index) + 2).w);
 
 #endif
 
-Hit traceScene(vec3 o, vec3 d) {
+// The nearest hit among the unbounded primitives (planes), which every ray
+// tests before the BVH's.
+Hit unboundedHit(vec3 o, vec3 d) {
   Hit hit;
   hit.prim = -1;
   hit.t = RAY_TMAX;
   vec4 header = sceneWord(0);
   int bvhPrims = int(header.x);
-  int nodes = int(header.y);
   int unbounded = int(header.w);
   for (int i = 0; i < unbounded; i++) {
     real t = intersectPrim(loadPrim(bvhPrims + i), o, d);
@@ -441,8 +442,43 @@ Hit traceScene(vec3 o, vec3 d) {
       hit.prim = bvhPrims + i;
     }
   }
+  return hit;
+}
+
+// Whether the ray enters BVH node (n0, n1)'s box before tmax.
+bool nodeEntered(vec3 o, vec3 invD, vec4 n0, vec4 n1, real tmax) {
+  return intersectBox(o, invD, vec3(n0.x, n0.y, n0.z), vec3(n1.x, n1.y, n1.z), tmax) != RAY_TMAX;
+}
+
+// hit, or the node's primitive's when the ray entered its box (inBox) and
+// meets the primitive nearer: a leaf's test, in traceScene's walk and in
+// the kernel's tile lists alike.
+Hit withLeafHit(Hit hit, vec3 o, vec3 d, vec4 n1, bool inBox) {
+  int prim = int(n1.w) - 1;  // -1: interior
+  if (inBox && prim >= 0) {
+    real t = intersectPrim(loadPrim(prim), o, d);
+    if (t > real(0) && t < hit.t) {
+      hit.t = t;
+      hit.prim = prim;
+    }
+#ifdef SHIMMER_MESHES
+    if (isMesh(loadPrim(prim))) {
+      MeshHit m = traceMesh(meshHeaderOf(prim), o, d, hit.t, hit.prim);
+      hit.t = m.t;
+      hit.prim = m.word;
+    }
+#endif
+  }
+  return hit;
+}
+
+vec3 inverseDirection(vec3 d) { return vec3(safeInverse(d.x), safeInverse(d.y), safeInverse(d.z)); }
+
+Hit traceScene(vec3 o, vec3 d) {
+  Hit hit = unboundedHit(o, d);
+  int nodes = int(sceneWord(0).y);
   if (nodes == 0) return hit;
-  vec3 invD = vec3(safeInverse(d.x), safeInverse(d.y), safeInverse(d.z));
+  vec3 invD = inverseDirection(d);
   // One straight-line body per node (leaves hold one primitive): a SIMD CPU
   // driver runs every statement of the body for all lanes anyway, and a nested
   // per-leaf loop cost twice as much.
@@ -450,23 +486,9 @@ Hit traceScene(vec3 o, vec3 d) {
   while (node < nodes) {
     vec4 n0 = sceneWord(1 + 2 * node);
     vec4 n1 = sceneWord(2 + 2 * node);
-    bool inBox = intersectBox(o, invD, vec3(n0.x, n0.y, n0.z), vec3(n1.x, n1.y, n1.z), hit.t) != RAY_TMAX;
-    int prim = int(n1.w) - 1;  // -1: interior
-    if (inBox && prim >= 0) {
-      real t = intersectPrim(loadPrim(prim), o, d);
-      if (t > real(0) && t < hit.t) {
-        hit.t = t;
-        hit.prim = prim;
-      }
-#ifdef SHIMMER_MESHES
-      if (isMesh(loadPrim(prim))) {
-        MeshHit m = traceMesh(meshHeaderOf(prim), o, d, hit.t, hit.prim);
-        hit.t = m.t;
-        hit.prim = m.word;
-      }
-#endif
-    }
-    node = inBox && prim < 0 ? node + 1 : int(n0.w);
+    bool inBox = nodeEntered(o, invD, n0, n1, hit.t);
+    hit = withLeafHit(hit, o, d, n1, inBox);
+    node = inBox && int(n1.w) - 1 < 0 ? node + 1 : int(n0.w);
   }
   return hit;
 }
@@ -712,7 +734,8 @@ PixelCandidates withMeshCandidates(PixelCandidates l, PixelCone k, int header) {
 }
 #endif
 
-PixelCandidates pixelCandidates(PixelCone k) {
+// The unbounded primitives, which every pixel's list starts with.
+PixelCandidates unboundedCandidates() {
   PixelCandidates l;
   l.count = 0;
   l.id0 = -1;
@@ -727,24 +750,33 @@ PixelCandidates pixelCandidates(PixelCone k) {
 #endif
   vec4 header = sceneWord(0);
   int bvhPrims = int(header.x);
-  int nodes = int(header.y);
   int unbounded = int(header.w);
   for (int i = 0; i < unbounded; i++) l = withCandidate(l, bvhPrims + i);
-  int node = 0;
-  while (node < nodes) {
-    vec4 n0 = sceneWord(1 + 2 * node);
-    vec4 n1 = sceneWord(2 + 2 * node);
-    vec3 lo = vec3(n0.x, n0.y, n0.z);
-    vec3 hi = vec3(n1.x, n1.y, n1.z);
-    bool inCone = coneTouchesSphere(k, (lo + hi) * real(0.5), length(hi - lo) * real(0.5));
-    int prim = int(n1.w) - 1;
-    if (inCone && prim >= 0 && coneTouchesPrim(k, loadPrim(prim))) l = withCandidate(l, prim);
+  return l;
+}
+
+// Whether the cone reaches BVH node (n0, n1)'s box (its bounding sphere).
+bool coneReachesNode(PixelCone k, vec4 n0, vec4 n1) {
+  vec3 lo = vec3(n0.x, n0.y, n0.z);
+  vec3 hi = vec3(n1.x, n1.y, n1.z);
+  return coneTouchesSphere(k, (lo + hi) * real(0.5), length(hi - lo) * real(0.5));
+}
+
+// l with the node's primitive when the cone reaches its box (inCone) and the
+// primitive: a leaf's step, in pixelCandidates' walk and in the kernel's tile
+// lists alike.
+PixelCandidates withLeafCandidate(PixelCandidates l, PixelCone k, vec4 n1, bool inCone) {
+  int prim = int(n1.w) - 1;
+  if (inCone && prim >= 0 && coneTouchesPrim(k, loadPrim(prim))) l = withCandidate(l, prim);
 #ifdef SHIMMER_MESHES
-    // A mesh is no candidate (its hits are triangles): its triangles in the pixel's pyramid are.
-    if (inCone && prim >= 0 && isMesh(loadPrim(prim))) l = withMeshCandidates(l, k, meshHeaderOf(prim));
+  // A mesh is no candidate (its hits are triangles): its triangles in the pixel's pyramid are.
+  if (inCone && prim >= 0 && isMesh(loadPrim(prim))) l = withMeshCandidates(l, k, meshHeaderOf(prim));
 #endif
-    node = inCone && prim < 0 ? node + 1 : int(n0.w);
-  }
+  return l;
+}
+
+// The candidates' primitives loaded once, for every sample of the pixel.
+PixelCandidates withLoadedPrims(PixelCandidates l) {
   l.p0 = loadPrim(max(l.id0, 0));
   l.p1 = loadPrim(max(l.id1, 0));
   l.p2 = loadPrim(max(l.id2, 0));
@@ -756,6 +788,20 @@ PixelCandidates pixelCandidates(PixelCone k) {
   l.p7 = loadPrim(max(l.id7, 0));
 #endif
   return l;
+}
+
+PixelCandidates pixelCandidates(PixelCone k) {
+  PixelCandidates l = unboundedCandidates();
+  int nodes = int(sceneWord(0).y);
+  int node = 0;
+  while (node < nodes) {
+    vec4 n0 = sceneWord(1 + 2 * node);
+    vec4 n1 = sceneWord(2 + 2 * node);
+    bool inCone = coneReachesNode(k, n0, n1);
+    l = withLeafCandidate(l, k, n1, inCone);
+    node = inCone && int(n1.w) - 1 < 0 ? node + 1 : int(n0.w);
+  }
+  return withLoadedPrims(l);
 }
 
 #ifdef SHIMMER_MESHES

@@ -664,6 +664,35 @@ TEST(GpuRender, BandsOfRowsGiveTheFrameOfOneDispatch) {
   }
 }
 
+// A primary ray tests its tile's listed primitives instead of walking the
+// BVH (tile_lists.h): the frames must be those of the walk bit for bit, for
+// 1-spp kernels, references (whose pixels take their candidates from the
+// list) and a mesh scene, over frames of a moving camera.
+TEST(GpuRender, TileListsRenderWhatTheWalkRenders) {
+  std::vector<KernelKind> kinds(std::begin(kKernelKinds), std::end(kKernelKinds));
+  const std::string torus = std::string(SHIMMER_SOURCE_DIR) + "/experiments/scenes/torus-lowpoly.json";
+  kinds.push_back({torus.c_str(), "none", DerivativeSource::kQuadFine, 0, 0});
+  kinds.push_back({torus.c_str(), "none", DerivativeSource::kAnalytic, 2, 0});
+  for (const KernelKind& k : kinds) {
+    SCOPED_TRACE(k.Name());
+    RenderSettings s = k.Settings(48);
+    s.height = 40;
+    s.max_rounds = 3;
+    for (int frame : {0, 7}) {
+      Frame listed = RenderOne(s, frame);
+      testing::ScopedTestHooks hooks(HooksWith([](testing::TestHooks& h) { h.walk_instead_of_tile_lists = true; }));
+      Frame walked = RenderOne(s, frame);
+      ASSERT_EQ(listed.planes.size(), walked.planes.size());
+      ASSERT_FALSE(listed.planes.empty());
+      EXPECT_EQ(listed.rounds, walked.rounds);
+      size_t differing = 0;
+      for (size_t i = 0; i < listed.planes.size(); ++i)
+        differing += std::memcmp(&listed.planes[i], &walked.planes[i], sizeof(float)) != 0;
+      EXPECT_EQ(differing, 0u) << "frame " << frame;
+    }
+  }
+}
+
 // shimmer freezes the specialization constants into the kernel and strips
 // what they make unreachable before the driver sees it (4x faster pipeline
 // creation on lavapipe). That must change no arithmetic: every kind of

@@ -65,7 +65,10 @@ void BuildTileLists(std::span<const glm::vec4> scene_words, const shading::Camer
     const PixelRect r = Project(lo - pad, hi + pad, camera);
     int tx0 = 0, ty0 = 0, tx1 = tiles_x - 1, ty1 = tiles_y - 1;
     if (!r.everywhere) {
-      if (r.x1 < 0 || r.y1 < 0 || r.x0 > width || r.y0 > height) continue;
+      // The tiles' whole extent: past the image's edge, a partial tile's
+      // invocations still trace (the quads' helper lanes, whose samples
+      // give their neighbours' derivatives).
+      if (r.x1 < 0 || r.y1 < 0 || r.x0 > tiles_x * kTileSide || r.y0 > tiles_y * kTileSide) continue;
       tx0 = std::max(0, int(std::floor(r.x0 / kTileSide)));
       ty0 = std::max(0, int(std::floor(r.y0 / kTileSide)));
       tx1 = std::min(tiles_x - 1, int(std::floor(r.x1 / kTileSide)));

@@ -28,7 +28,8 @@ std::size_t TileListWords(int width, int height);
 // Fills `out` (TileListWords words) for the scene packed as `scene_words`
 // (scene_packing.cpp's layout: the BVH's leaves are the bounded primitives)
 // seen by `camera`. A tile lists the node index of every leaf whose box's
-// projection, widened by a pixel, reaches the tile, in depth-first order
+// projection, widened by a pixel, reaches the tile (all of its 8x8 pixels,
+// those past the image's edge too), in depth-first order
 // (the order traceScene meets them, so ties resolve alike); a box not wholly
 // in front of the camera reaches every tile. Unbounded primitives (planes)
 // are not listed: every ray tests them first, as in traceScene.

@@ -41,7 +41,9 @@ class TileLists : public ::testing::TestWithParam<Case> {};
 // must walk the BVH. And each list follows the walk's order.
 TEST_P(TileLists, ListEveryLeafATilesRaysCanReachInTheWalksOrder) {
   const Case& c = GetParam();
-  const int width = 160, height = 96;
+  // Not multiples of 8: the last tiles reach past the image's edge, where
+  // the quads' helper lanes still trace.
+  const int width = 158, height = 93;
   const auto loaded = scene::LoadScene(c.scene);
   ASSERT_TRUE(loaded) << loaded.error();
   const std::vector<glm::vec4> words = scene::PackScene(*loaded);
@@ -76,7 +78,9 @@ TEST_P(TileLists, ListEveryLeafATilesRaysCanReachInTheWalksOrder) {
     for (int k = 0; k < 400; ++k) {
       const glm::dvec3 q{w0.x + u(rng) * (w1.x - w0.x), w0.y + u(rng) * (w1.y - w0.y), w0.z + u(rng) * (w1.z - w0.z)};
       glm::dvec2 pixel;
-      if (!ToPixel(camera, q, &pixel) || pixel.x < 0 || pixel.y < 0 || pixel.x >= width || pixel.y >= height) continue;
+      if (!ToPixel(camera, q, &pixel) || pixel.x < 0 || pixel.y < 0 || pixel.x >= tiles_x * kTileSide ||
+          pixel.y >= tiles * kTileSide / tiles_x)
+        continue;
       ++seen;
       const int t = int(pixel.y) / kTileSide * tiles_x + int(pixel.x) / kTileSide;
       if (out[2 * t + 1] >= 0) {
@@ -125,6 +129,30 @@ TEST(TileLists, ABoxAroundTheCameraReachesEveryTile) {
     for (int i = 0; i < count; ++i) found = found || out[first + i] == leaf_of_big;
     EXPECT_TRUE(found) << "tile " << t;
   }
+}
+
+// A 60-pixel-wide image has a partial last column of tiles (pixels 56-63):
+// its invocations past the edge (60-63) still trace, as the quads' helper
+// lanes whose samples give their neighbours' derivatives. A sphere seen
+// only there must be in that tile's list.
+TEST(TileLists, ABoxSeenOnlyPastTheImagesEdgeIsListedForItsPartialTile) {
+  shading::CameraDesc camera;  // at (0, 0, 5) looking down -z, tan(fov/2) = 0.4
+  camera.width = 60, camera.height = 40;
+  // The ray through pixel (62.5, 20.5) meets z = 0 at x = nx sx 5.
+  const double sx = camera.tan_half_fov_y * 60.0 / 40.0, nx = 2 * 62.5 / 60 - 1;
+  scene::Scene s;
+  s.primitives.resize(1);  // a sphere
+  s.primitives[0].a = {nx * sx * 5, -(2 * 20.5 / 40 - 1) * camera.tan_half_fov_y * 5, 0};
+  s.primitives[0].radius = 0.01;
+  const std::vector<glm::vec4> words = scene::PackScene(s);
+  glm::dvec2 pixel;
+  ASSERT_TRUE(ToPixel(camera, s.primitives[0].a, &pixel));
+  ASSERT_NEAR(pixel.x, 62.5, 1e-9);  // past the edge, inside the partial tile
+  std::vector<std::int32_t> out(TileListWords(60, 40));
+  BuildTileLists(words, camera, 60, 40, out);
+  const int t = 2 * 8 + 7;  // tile row 2 (pixels 16-23), column 7 (56-63)
+  ASSERT_EQ(out[2 * t + 1], 1);
+  EXPECT_EQ(out[out[2 * t]], 0);  // the one leaf, node 0
 }
 
 }  // namespace

@@ -9,4 +9,6 @@ plot 'sphere___ggx_0_1___orbit___quad_pareto.dat' index 0 using 1:2 with points 
      'sphere___ggx_0_1___orbit___quad_front_tv_err.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
      'sphere___ggx_0_1___orbit___quad_front_tv_err.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'sphere___ggx_0_1___orbit___quad_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
-     keyentry with points pt 6 lc rgb '#d62728' title '1: unity-hdrp'
+     keyentry with points pt 6 lc rgb '#d62728' title '1: filament', \
+     keyentry with points pt 6 lc rgb '#d62728' title '2: godot', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: unity-hdrp'

@@ -9,10 +9,7 @@ plot 'nm_plane___ggx_0_05___orbit___quad_pareto.dat' index 0 using 1:2 with poin
      'nm_plane___ggx_0_05___orbit___quad_front_tv_err.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
      'nm_plane___ggx_0_05___orbit___quad_front_tv_err.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'nm_plane___ggx_0_05___orbit___quad_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
-     keyentry with points pt 6 lc rgb '#d62728' title '1: none', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: tk19', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: tk19+toksvig', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: vmf', \
-     keyentry with points pt 6 lc rgb '#d62728' title '5: toksvig', \
-     keyentry with points pt 6 lc rgb '#d62728' title '6: k16-ggx-rect-stable+lean', \
-     keyentry with points pt 6 lc rgb '#d62728' title '7: lean'
+     keyentry with points pt 6 lc rgb '#d62728' title '1: tk19', \
+     keyentry with points pt 6 lc rgb '#d62728' title '2: toksvig-bp', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: toksvig', \
+     keyentry with points pt 6 lc rgb '#d62728' title '4: lean'

@@ -12,4 +12,5 @@ plot 'nm_plane_patches___ggx_0_05___orbit___quad_pareto.dat' index 0 using 1:3 w
      keyentry with points pt 6 lc rgb '#d62728' title '1: tk19', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: none', \
      keyentry with points pt 6 lc rgb '#d62728' title '3: supersample-2', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: nm-mip'
+     keyentry with points pt 6 lc rgb '#d62728' title '4: unity-hdrp-nm', \
+     keyentry with points pt 6 lc rgb '#d62728' title '5: nm-mip'

@@ -10,5 +10,4 @@ plot 'nm_plane_patches___ggx_0_05___orbit___quad_pareto.dat' index 0 using 1:2 w
      'nm_plane_patches___ggx_0_05___orbit___quad_front_tv_err.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'nm_plane_patches___ggx_0_05___orbit___quad_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
      keyentry with points pt 6 lc rgb '#d62728' title '1: tk19', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: nm-mip', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: unity-hdrp-nm'
+     keyentry with points pt 6 lc rgb '#d62728' title '2: unity-hdrp-nm'

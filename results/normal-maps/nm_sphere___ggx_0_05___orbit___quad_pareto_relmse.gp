@@ -11,6 +11,5 @@ plot 'nm_sphere___ggx_0_05___orbit___quad_pareto.dat' index 0 using 1:3 with poi
      'nm_sphere___ggx_0_05___orbit___quad_pareto.dat' index 1 using 1:3 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
      keyentry with points pt 6 lc rgb '#d62728' title '1: none', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: tk19', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: vmf', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: toksvig-bp', \
-     keyentry with points pt 6 lc rgb '#d62728' title '5: lean'
+     keyentry with points pt 6 lc rgb '#d62728' title '3: toksvig-bp', \
+     keyentry with points pt 6 lc rgb '#d62728' title '4: lean'

@@ -9,8 +9,7 @@ plot 'bumpy_plane___ggx_0_01___dolly___analytic_pareto.dat' index 0 using 1:3 wi
      'bumpy_plane___ggx_0_01___dolly___analytic_front_relmse.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
      'bumpy_plane___ggx_0_01___dolly___analytic_front_relmse.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'bumpy_plane___ggx_0_01___dolly___analytic_pareto.dat' index 1 using 1:3 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
-     keyentry with points pt 6 lc rgb '#d62728' title '1: toksvig-quad', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: filament', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: supersample-2', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: supersample-3', \
-     keyentry with points pt 6 lc rgb '#d62728' title '5: supersample-4'
+     keyentry with points pt 6 lc rgb '#d62728' title '1: supersample-1', \
+     keyentry with points pt 6 lc rgb '#d62728' title '2: supersample-2', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: supersample-3', \
+     keyentry with points pt 6 lc rgb '#d62728' title '4: supersample-4'

@@ -9,9 +9,8 @@ plot 'bumpy_plane___ggx_0_05___orbit___analytic_pareto.dat' index 0 using 1:2 wi
      'bumpy_plane___ggx_0_05___orbit___analytic_front_tv_err.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
      'bumpy_plane___ggx_0_05___orbit___analytic_front_tv_err.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'bumpy_plane___ggx_0_05___orbit___analytic_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
-     keyentry with points pt 6 lc rgb '#d62728' title '1: toksvig-quad', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: tk21', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: tk19-forward', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: godot', \
-     keyentry with points pt 6 lc rgb '#d62728' title '5: supersample-3', \
-     keyentry with points pt 6 lc rgb '#d62728' title '6: supersample-4'
+     keyentry with points pt 6 lc rgb '#d62728' title '1: supersample-1', \
+     keyentry with points pt 6 lc rgb '#d62728' title '2: k16-beckmann-parallelogram sigma2=1', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: godot', \
+     keyentry with points pt 6 lc rgb '#d62728' title '4: supersample-3', \
+     keyentry with points pt 6 lc rgb '#d62728' title '5: supersample-4'

@@ -10,7 +10,7 @@ plot 'bumpy_plane___ggx_0_5___orbit___quad_pareto.dat' index 0 using 1:3 with po
      'bumpy_plane___ggx_0_5___orbit___quad_front_relmse.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'bumpy_plane___ggx_0_5___orbit___quad_pareto.dat' index 1 using 1:3 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
      keyentry with points pt 6 lc rgb '#d62728' title '1: supersample-1', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: tk21', \
+     keyentry with points pt 6 lc rgb '#d62728' title '2: tk19-forward-rect', \
      keyentry with points pt 6 lc rgb '#d62728' title '3: godot', \
      keyentry with points pt 6 lc rgb '#d62728' title '4: supersample-2', \
      keyentry with points pt 6 lc rgb '#d62728' title '5: supersample-3', \

@@ -10,5 +10,6 @@ plot 'experiments_scenes_cable_json___ggx_0_05___orbit___quad_pareto.dat' index 
      'experiments_scenes_cable_json___ggx_0_05___orbit___quad_front_tv_err.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'experiments_scenes_cable_json___ggx_0_05___orbit___quad_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
      keyentry with points pt 6 lc rgb '#d62728' title '1: none', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: tk19-forward-rect', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: supersample-2'
+     keyentry with points pt 6 lc rgb '#d62728' title '2: k16-beckmann-rect fp_max=1', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: tk19-forward-rect', \
+     keyentry with points pt 6 lc rgb '#d62728' title '4: supersample-2'

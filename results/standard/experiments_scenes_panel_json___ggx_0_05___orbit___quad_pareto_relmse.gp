@@ -9,6 +9,7 @@ plot 'experiments_scenes_panel_json___ggx_0_05___orbit___quad_pareto.dat' index 
      'experiments_scenes_panel_json___ggx_0_05___orbit___quad_front_relmse.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
      'experiments_scenes_panel_json___ggx_0_05___orbit___quad_front_relmse.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'experiments_scenes_panel_json___ggx_0_05___orbit___quad_pareto.dat' index 1 using 1:3 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
-     keyentry with points pt 6 lc rgb '#d62728' title '1: none', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: nm-point', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: nm-mip'
+     keyentry with points pt 6 lc rgb '#d62728' title '1: tk19', \
+     keyentry with points pt 6 lc rgb '#d62728' title '2: none', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: nm-point', \
+     keyentry with points pt 6 lc rgb '#d62728' title '4: nm-mip'

@@ -9,7 +9,7 @@ plot 'experiments_scenes_tk19_fig1_json___ggx_0_01___orbit___quad_pareto.dat' in
      'experiments_scenes_tk19_fig1_json___ggx_0_01___orbit___quad_front_tv_err.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
      'experiments_scenes_tk19_fig1_json___ggx_0_01___orbit___quad_front_tv_err.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'experiments_scenes_tk19_fig1_json___ggx_0_01___orbit___quad_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
-     keyentry with points pt 6 lc rgb '#d62728' title '1: tk19-forward-rect', \
+     keyentry with points pt 6 lc rgb '#d62728' title '1: k16-beckmann-rect fp_max=1', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: k16-beckmann-parallelogram sigma2=0.25', \
      keyentry with points pt 6 lc rgb '#d62728' title '3: tk19-forward', \
      keyentry with points pt 6 lc rgb '#d62728' title '4: k16-ggx-rect-jacobian'

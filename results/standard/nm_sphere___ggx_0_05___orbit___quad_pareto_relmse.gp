@@ -12,6 +12,5 @@ plot 'nm_sphere___ggx_0_05___orbit___quad_pareto.dat' index 0 using 1:3 with poi
      keyentry with points pt 6 lc rgb '#d62728' title '1: none', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: tk19', \
      keyentry with points pt 6 lc rgb '#d62728' title '3: tk19+toksvig', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: unity-hdrp-nm', \
-     keyentry with points pt 6 lc rgb '#d62728' title '5: vmf', \
-     keyentry with points pt 6 lc rgb '#d62728' title '6: lean'
+     keyentry with points pt 6 lc rgb '#d62728' title '4: vmf', \
+     keyentry with points pt 6 lc rgb '#d62728' title '5: lean'

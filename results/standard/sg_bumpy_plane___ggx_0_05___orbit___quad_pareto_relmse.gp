@@ -10,6 +10,5 @@ plot 'sg_bumpy_plane___ggx_0_05___orbit___quad_pareto.dat' index 0 using 1:3 wit
      'sg_bumpy_plane___ggx_0_05___orbit___quad_front_relmse.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'sg_bumpy_plane___ggx_0_05___orbit___quad_pareto.dat' index 1 using 1:3 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
      keyentry with points pt 6 lc rgb '#d62728' title '1: sg-warp-k16', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: asg-warp', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: asg-warp-k16', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: supersample-2'
+     keyentry with points pt 6 lc rgb '#d62728' title '2: asg-warp-k16', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: supersample-2'

@@ -9,6 +9,5 @@ plot 'sg_plane___ggx_0_05___orbit___analytic_pareto.dat' index 0 using 1:2 with 
      'sg_plane___ggx_0_05___orbit___analytic_front_tv_err.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
      'sg_plane___ggx_0_05___orbit___analytic_front_tv_err.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'sg_plane___ggx_0_05___orbit___analytic_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
-     keyentry with points pt 6 lc rgb '#d62728' title '1: asg-warp', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: asg-warp-k16', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: none'
+     keyentry with points pt 6 lc rgb '#d62728' title '1: asg-warp-k16', \
+     keyentry with points pt 6 lc rgb '#d62728' title '2: tk21'

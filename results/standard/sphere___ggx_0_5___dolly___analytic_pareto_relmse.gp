@@ -9,7 +9,7 @@ plot 'sphere___ggx_0_5___dolly___analytic_pareto.dat' index 0 using 1:3 with poi
      'sphere___ggx_0_5___dolly___analytic_front_relmse.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
      'sphere___ggx_0_5___dolly___analytic_front_relmse.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'sphere___ggx_0_5___dolly___analytic_pareto.dat' index 1 using 1:3 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
-     keyentry with points pt 6 lc rgb '#d62728' title '1: none', \
+     keyentry with points pt 6 lc rgb '#d62728' title '1: supersample-1', \
      keyentry with points pt 6 lc rgb '#d62728' title '2: tk19-forward', \
      keyentry with points pt 6 lc rgb '#d62728' title '3: supersample-2', \
      keyentry with points pt 6 lc rgb '#d62728' title '4: supersample-3', \

@@ -9,7 +9,6 @@ plot 'sphere_field___ggx_0_01___dolly___analytic_pareto.dat' index 0 using 1:2 w
      'sphere_field___ggx_0_01___dolly___analytic_front_tv_err.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
      'sphere_field___ggx_0_01___dolly___analytic_front_tv_err.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'sphere_field___ggx_0_01___dolly___analytic_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
-     keyentry with points pt 6 lc rgb '#d62728' title '1: godot', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: k16-beckmann-parallelogram sigma2=1', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: vlachos15', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: tk21'
+     keyentry with points pt 6 lc rgb '#d62728' title '1: supersample-1', \
+     keyentry with points pt 6 lc rgb '#d62728' title '2: unity-hdrp', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: tk21'

@@ -10,8 +10,5 @@ plot 'sphere_field___ggx_0_01___orbit___quad_pareto.dat' index 0 using 1:2 with 
      'sphere_field___ggx_0_01___orbit___quad_front_tv_err.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'sphere_field___ggx_0_01___orbit___quad_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
      keyentry with points pt 6 lc rgb '#d62728' title '1: supersample-1', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: k16-beckmann-rect fp_max=1', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: vlachos15', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: toksvig-quad', \
-     keyentry with points pt 6 lc rgb '#d62728' title '5: unity-hdrp', \
-     keyentry with points pt 6 lc rgb '#d62728' title '6: tk21'
+     keyentry with points pt 6 lc rgb '#d62728' title '2: filament', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: tk21'

@@ -10,9 +10,8 @@ plot 'sphere_field___ggx_0_2___dolly___quad_pareto.dat' index 0 using 1:3 with p
      'sphere_field___ggx_0_2___dolly___quad_front_relmse.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'sphere_field___ggx_0_2___dolly___quad_pareto.dat' index 1 using 1:3 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
      keyentry with points pt 6 lc rgb '#d62728' title '1: supersample-1', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: vlachos15', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: toksvig-quad', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: unity-hdrp', \
-     keyentry with points pt 6 lc rgb '#d62728' title '5: tk21', \
-     keyentry with points pt 6 lc rgb '#d62728' title '6: supersample-3', \
-     keyentry with points pt 6 lc rgb '#d62728' title '7: supersample-4'
+     keyentry with points pt 6 lc rgb '#d62728' title '2: filament', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: godot', \
+     keyentry with points pt 6 lc rgb '#d62728' title '4: tk21', \
+     keyentry with points pt 6 lc rgb '#d62728' title '5: supersample-3', \
+     keyentry with points pt 6 lc rgb '#d62728' title '6: supersample-4'

@@ -9,7 +9,10 @@ plot 'wires___ggx_0_5___dolly___analytic_pareto.dat' index 0 using 1:3 with poin
      'wires___ggx_0_5___dolly___analytic_front_relmse.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
      'wires___ggx_0_5___dolly___analytic_front_relmse.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'wires___ggx_0_5___dolly___analytic_pareto.dat' index 1 using 1:3 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
-     keyentry with points pt 6 lc rgb '#d62728' title '1: tk19-forward-rect', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: k16-ggx-rect-jacobian', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: supersample-3', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: supersample-4'
+     keyentry with points pt 6 lc rgb '#d62728' title '1: k16-beckmann-rect fp_max=0.25', \
+     keyentry with points pt 6 lc rgb '#d62728' title '2: tk19', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: tk19-forward-rect', \
+     keyentry with points pt 6 lc rgb '#d62728' title '4: k16-ggx-rect-jacobian', \
+     keyentry with points pt 6 lc rgb '#d62728' title '5: supersample-2', \
+     keyentry with points pt 6 lc rgb '#d62728' title '6: supersample-3', \
+     keyentry with points pt 6 lc rgb '#d62728' title '7: supersample-4'

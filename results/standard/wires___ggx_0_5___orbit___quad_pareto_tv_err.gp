@@ -9,8 +9,10 @@ plot 'wires___ggx_0_5___orbit___quad_pareto.dat' index 0 using 1:2 with points p
      'wires___ggx_0_5___orbit___quad_front_tv_err.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
      'wires___ggx_0_5___orbit___quad_front_tv_err.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'wires___ggx_0_5___orbit___quad_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
-     keyentry with points pt 6 lc rgb '#d62728' title '1: k16-beckmann-parallelogram sigma2=1', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: none', \
-     keyentry with points pt 6 lc rgb '#d62728' title '3: vlachos15', \
-     keyentry with points pt 6 lc rgb '#d62728' title '4: supersample-3', \
-     keyentry with points pt 6 lc rgb '#d62728' title '5: supersample-4'
+     keyentry with points pt 6 lc rgb '#d62728' title '1: godot', \
+     keyentry with points pt 6 lc rgb '#d62728' title '2: k16-ggx-proxy', \
+     keyentry with points pt 6 lc rgb '#d62728' title '3: toksvig-quad', \
+     keyentry with points pt 6 lc rgb '#d62728' title '4: vlachos15', \
+     keyentry with points pt 6 lc rgb '#d62728' title '5: supersample-2', \
+     keyentry with points pt 6 lc rgb '#d62728' title '6: supersample-3', \
+     keyentry with points pt 6 lc rgb '#d62728' title '7: supersample-4'

@@ -9,6 +9,6 @@ plot 'sphere_field___ggx_0_02___orbit___quad_pareto.dat' index 0 using 1:2 with 
      'sphere_field___ggx_0_02___orbit___quad_front_tv_err.dat' using 1:2 with points pt 6 ps 2 lc rgb '#d62728' title 'Pareto front', \
      'sphere_field___ggx_0_02___orbit___quad_front_tv_err.dat' using 1:2:3 with labels offset 1.2,0.8 font ',9' notitle, \
      'sphere_field___ggx_0_02___orbit___quad_pareto.dat' index 1 using 1:2 with linespoints dt 2 lc rgb '#555555' title 'supersample-N (brute force)', \
-     keyentry with points pt 6 lc rgb '#d62728' title '1: box5 fp_max=1', \
-     keyentry with points pt 6 lc rgb '#d62728' title '2: box5 fp_max=0.25', \
+     keyentry with points pt 6 lc rgb '#d62728' title '1: box5 fp_max=0.25', \
+     keyentry with points pt 6 lc rgb '#d62728' title '2: my-tk19 kappa=0.18 sigma2=0.25', \
      keyentry with points pt 6 lc rgb '#d62728' title '3: k16-beckmann-rect fp_max=0.25'

@@ -121,8 +121,6 @@ const std::vector<std::pair<std::string, std::vector<Cut>>>& FrameStages() {
       // The quad exchange and the footprint (the exchanged samples and the
       // neighbours' rays continued onto the primitive) go dead.
       {"no-footprint", {{"sh.specular = s.n + vec3(f.hpp, 0.0);", "sh.specular = s.n;"}}},
-      // The scene walk and the camera ray: what is left is the invocation,
-      // its pixel and the channel writes.
       // The bounded primitives (the tile's list): the ray tests the planes
       // alone.
       {"planes-only",

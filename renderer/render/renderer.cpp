@@ -163,8 +163,7 @@ struct Renderer::Impl {
     const std::span<std::int32_t> out(static_cast<std::int32_t*>(tile_buf->data()),
                                       TileListWords(settings.width, settings.height));
     if (walk_instead_of_tile_lists) {
-      const std::size_t tiles = out.size() / (2 + kMaxTilePrimitives);
-      for (std::size_t t = 0; t < tiles; ++t) out[2 * t] = 0, out[2 * t + 1] = -1;
+      WalkEveryTile(settings.width, settings.height, out);
       return;
     }
     BuildTileLists(words, scene::CameraAt(settings.camera, settings.scene.rig, index, settings.fps, settings.width,

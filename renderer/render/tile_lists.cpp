@@ -9,6 +9,9 @@ namespace {
 
 int TilesAlong(int pixels) { return (pixels + kTileSide - 1) / kTileSide; }
 
+// Tile t's header: no list, the BVH walk.
+void MarkWalk(int t, std::span<std::int32_t> out) { out[2 * t] = 0, out[2 * t + 1] = -1; }
+
 // The pixel rectangle a box's projection covers, widened by a pixel (the
 // kernel's float camera against this double one, and a reference sample's
 // ray anywhere in its pixel); `everywhere` when a corner is not in front of
@@ -48,6 +51,10 @@ std::size_t TileListWords(int width, int height) {
   return tiles * (2 + kMaxTilePrimitives);
 }
 
+void WalkEveryTile(int width, int height, std::span<std::int32_t> out) {
+  for (int t = 0; t < TilesAlong(width) * TilesAlong(height); ++t) MarkWalk(t, out);
+}
+
 void BuildTileLists(std::span<const glm::vec4> scene_words, const shading::CameraDesc& camera, int width,
                     int height, std::span<std::int32_t> out) {
   const int tiles_x = TilesAlong(width), tiles_y = TilesAlong(height), tiles = tiles_x * tiles_y;
@@ -84,7 +91,7 @@ void BuildTileLists(std::span<const glm::vec4> scene_words, const shading::Camer
   for (int t = 0; t < tiles; ++t) {
     const auto& list = listed[static_cast<std::size_t>(t)];
     if (list.size() > std::size_t(kMaxTilePrimitives)) {
-      out[2 * t] = 0, out[2 * t + 1] = -1;  // the BVH walk
+      MarkWalk(t, out);
       continue;
     }
     out[2 * t] = next;

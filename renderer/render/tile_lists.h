@@ -36,4 +36,8 @@ std::size_t TileListWords(int width, int height);
 void BuildTileLists(std::span<const glm::vec4> scene_words, const shading::CameraDesc& camera, int width,
                     int height, std::span<std::int32_t> out);
 
+// Fills `out` (TileListWords words) so that every tile walks the BVH (the
+// renderer's test hook walk_instead_of_tile_lists).
+void WalkEveryTile(int width, int height, std::span<std::int32_t> out);
+
 }  // namespace shimmer::render

@@ -51,7 +51,11 @@ void FlickerSpectrum::AddFrame(const cv::Mat& signal, const cv::Mat& excluded) {
   const float* src = signal.ptr<float>();
   const int* idx = pixels_.data();
   const int count = static_cast<int>(pixels_.size());
-  for (int p = 0; p < count; ++p) slot[p] = src[idx[p]];
+  // A gather over every region pixel: on every core, in chunks.
+  constexpr int kChunk = 1 << 16;
+  cv::parallel_for_(cv::Range(0, (count + kChunk - 1) / kChunk), [&](const cv::Range& chunks) {
+    for (int p = chunks.start * kChunk; p < std::min(chunks.end * kChunk, count); ++p) slot[p] = src[idx[p]];
+  });
   ++frames_;
   const int first = frames_ - length_;
   if (first >= 0 && first % step_ == 0) AddSegment(first, excluded);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "pixel_row.h"
 #include "shimmer/metrics/energy_bias.h"
@@ -59,6 +60,15 @@ cv::Mat MaskedFloat(const cv::Mat& map, const cv::Mat& mask) {
   map.convertTo(out, CV_32F);
   out.setTo(0, mask == 0);
   return out;
+}
+
+// cv::Mat::copyTo on one thread was a frame's last serial step.
+void CopyOnEveryCore(const cv::Mat& from, cv::Mat& to) {
+  to.create(from.size(), from.type());
+  const size_t row_bytes = from.cols * from.elemSize();
+  cv::parallel_for_(cv::Range(0, from.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) std::memcpy(to.ptr(y), from.ptr(y), row_bytes);
+  });
 }
 
 std::vector<int> RegionIndices(const cv::Mat& region) {
@@ -267,8 +277,8 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
   spectrum_.AddFrame(signal_frame_, excluded_);
   if (setup_.with_motion && has_previous) warp_.AddFrame(previous_test_, T, motion, setup_.region, excluded_);
   // The planes may be reused by the caller: keep copies for the differences.
-  T.copyTo(previous_test_);
-  if (has_ref) Rf.copyTo(previous_ref_);
+  CopyOnEveryCore(T, previous_test_);
+  if (has_ref) CopyOnEveryCore(Rf, previous_ref_);
   ++frames_added_;
 }
 
@@ -279,45 +289,72 @@ void MetricsAccumulator::AddIntervals(MetricsReport* report, const cv::Mat& good
   TileBlockStatistics cells(block_frames_);
   const std::vector<double>& flicker_power = spectrum_.pixel_weighted_power();
   const std::vector<int>& flicker_segments = spectrum_.pixel_segments();
-  std::vector<float> sums(static_cast<size_t>(kPixelSums) * blocks);
-  double noise = 0, relmse_noise = 0, weighted_noise = 0;
-  long long used = 0;
+  const int tiles_y = (setup_.height + tile - 1) / tile;
   // Only tiles that intersect the good region, each weighted by its pixels.
   // A tile with a pixel that turned non-finite after its first sample is
   // left out: that pixel's earlier samples are in the tile's squares_.
-  for (int ty = 0; ty < setup_.height; ty += tile)
-    for (int tx = 0; tx < setup_.width; tx += tile) {
-      bool tainted = false;
-      for (int y = ty; y < std::min(ty + tile, setup_.height); ++y)
-        for (int x = tx; x < std::min(tx + tile, setup_.width); ++x) {
-          const size_t i = static_cast<size_t>(y) * setup_.width + x;
-          if (setup_.region.at<uint8_t>(y, x) && !good.at<uint8_t>(y, x) && moments_test_.count(i) > 0)
-            tainted = true;
-        }
-      if (tainted) continue;
-      int index = -1;
-      for (int y = ty; y < std::min(ty + tile, setup_.height); ++y)
-        for (int x = tx; x < std::min(tx + tile, setup_.width); ++x) {
-          if (!good.at<uint8_t>(y, x)) continue;
-          const int p = region_index_[static_cast<size_t>(y) * setup_.width + x];
-          if (index < 0) index = cells.AddTile();
-          for (int k = 0; k < blocks; ++k)
-            for (int s = 0; s < kPixelSums; ++s)
-              sums[s * blocks + k] = cells_[(static_cast<size_t>(k) * region_count + p) * kPixelSums + s];
-          cells.AddPixelMeans(index, shifts_[2 * p], shifts_[2 * p + 1], sums.data(), flicker_power[p],
-                              flicker_segments[p]);
-          if (!noise_.empty()) {
+  // Which tiles enter is found on every core; their rows are then numbered
+  // in tile order, as a serial loop would add them, and filled on every core
+  // (each tile's row by one thread, its pixels in the serial loop's order).
+  std::vector<int> row_of_tile(static_cast<size_t>(tiles_x_) * tiles_y, -1);
+  cv::parallel_for_(cv::Range(0, tiles_y), [&](const cv::Range& rows) {
+    for (int ty = rows.start * tile; ty < std::min(rows.end * tile, setup_.height); ty += tile)
+      for (int tx = 0; tx < setup_.width; tx += tile) {
+        bool tainted = false, any = false;
+        for (int y = ty; y < std::min(ty + tile, setup_.height); ++y)
+          for (int x = tx; x < std::min(tx + tile, setup_.width); ++x) {
+            const size_t i = static_cast<size_t>(y) * setup_.width + x;
+            if (setup_.region.at<uint8_t>(y, x) && !good.at<uint8_t>(y, x) && moments_test_.count(i) > 0)
+              tainted = true;
+            any = any || good.at<uint8_t>(y, x);
+          }
+        if (any && !tainted) row_of_tile[static_cast<size_t>(ty / tile) * tiles_x_ + tx / tile] = 0;
+      }
+  });
+  for (int& row : row_of_tile)
+    if (row == 0) row = cells.AddTile();
+  std::vector<long long> row_used(static_cast<size_t>(tiles_y), 0);
+  cv::parallel_for_(cv::Range(0, tiles_y), [&](const cv::Range& rows) {
+    std::vector<float> sums(static_cast<size_t>(kPixelSums) * blocks);
+    for (int row = rows.start; row < rows.end; ++row) {
+      const int ty = row * tile;
+      for (int tx = 0; tx < setup_.width; tx += tile) {
+        const size_t t = static_cast<size_t>(row) * tiles_x_ + tx / tile;
+        const int index = row_of_tile[t];
+        if (index < 0) continue;
+        for (int y = ty; y < std::min(ty + tile, setup_.height); ++y)
+          for (int x = tx; x < std::min(tx + tile, setup_.width); ++x) {
+            if (!good.at<uint8_t>(y, x)) continue;
+            const int p = region_index_[static_cast<size_t>(y) * setup_.width + x];
+            for (int k = 0; k < blocks; ++k)
+              for (int s = 0; s < kPixelSums; ++s)
+                sums[s * blocks + k] = cells_[(static_cast<size_t>(k) * region_count + p) * kPixelSums + s];
+            cells.AddPixelMeans(index, shifts_[2 * p], shifts_[2 * p + 1], sums.data(), flicker_power[p],
+                                flicker_segments[p]);
+            ++row_used[row];
+          }
+        cells.AddTileSquares(index, squares_.data() + t * kSquareSums * blocks);
+      }
+    }
+  });
+  long long used = 0;
+  for (long long n : row_used) used += n;
+  // The reference noise's sums in the serial loop's order (tiles in order,
+  // each tile's pixels in order), so that their last bits are as they were.
+  double noise = 0, relmse_noise = 0, weighted_noise = 0;
+  if (!noise_.empty())
+    for (int ty = 0; ty < setup_.height; ty += tile)
+      for (int tx = 0; tx < setup_.width; tx += tile) {
+        if (row_of_tile[static_cast<size_t>(ty / tile) * tiles_x_ + tx / tile] < 0) continue;
+        for (int y = ty; y < std::min(ty + tile, setup_.height); ++y)
+          for (int x = tx; x < std::min(tx + tile, setup_.width); ++x) {
+            if (!good.at<uint8_t>(y, x)) continue;
+            const int p = region_index_[static_cast<size_t>(y) * setup_.width + x];
             noise += noise_[p];
             relmse_noise += relmse_noise_[p];
             weighted_noise += weighted_noise_[p];
           }
-          ++used;
-        }
-      if (index >= 0) {
-        const size_t t = static_cast<size_t>(ty / tile) * tiles_x_ + tx / tile;
-        cells.AddTileSquares(index, squares_.data() + t * kSquareSums * blocks);
       }
-    }
 
   TileBlockStatistics::Estimates point;
   point.tv_err = report->tv_err.value_or(0);

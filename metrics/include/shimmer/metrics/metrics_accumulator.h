@@ -97,10 +97,10 @@ class MetricsAccumulator {
   std::vector<float> shifts_;  // (t0, r0) per region pixel
   // Per region pixel, in double: sum_t w, sum_t w E, sum_t w E^2 with
   // w = 1 / (R^2 + eps), for relmse's temporal/spatial split.
-  std::vector<double> joint_;
+  HugePageVector<double> joint_;
   // Per region pixel, with stderr.Y: sum_t s^2, sum_t (d relmse term / dR)^2 s^2,
   // and sum_t w s^2 (what the noise adds to relmse's temporal part).
-  std::vector<double> noise_, relmse_noise_, weighted_noise_;
+  HugePageVector<double> noise_, relmse_noise_, weighted_noise_;
   int stderr_frames_ = 0;
 
   // Sparkle statistics (setup.sparkle_threshold > 0): one tracker per

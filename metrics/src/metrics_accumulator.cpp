@@ -142,55 +142,34 @@ MetricsAccumulator::SparkleTracks MetricsAccumulator::TracksOf(const cv::Mat& mo
 // The bootstrap cells, relMSE's joint sums and the reference noise's sums of
 // row y's updated pixels (with a reference): a pixel's first moments into
 // `block_cells`, the sums that enter its tile linearly into that tile's
-// row of `block` in squares_, one tile's run of pixels at a time.
+// row of `block` in squares_ (detail::AddCellRow, four pixels at a time).
 void MetricsAccumulator::AddCellRow(int y, const float* tv_row, const float* rv_row, const float* se_row,
-                                    const detail::PixelRowTerms& terms, float* block_cells, int block) {
-  const size_t row = static_cast<size_t>(y) * setup_.width;
+                                    const detail::PixelRowTerms& terms, float* block_cells, int block,
+                                    std::vector<double>& tile_squares, std::vector<uint8_t>& tile_any) {
   const int tile = setup_.bootstrap.tile;
   const size_t blocks = block_frames_.size();
-  using S = TileBlockStatistics;
-  for (int x0 = 0; x0 < setup_.width; x0 += tile) {
-    double squares[kSquareSums] = {};
-    bool any = false;
-    for (int x = x0; x < std::min(x0 + tile, setup_.width); ++x) {
-      if (!terms.updated[x]) continue;
-      any = true;
-      const size_t i = row + x;
-      const double tv = tv_row[x], rv = rv_row[x];
-      const double e = tv - rv;
-      const int p = region_index_[i];
-      if (frames_added_ == 0) {
-        shifts_[2 * p] = static_cast<float>(tv);
-        shifts_[2 * p + 1] = static_cast<float>(rv);
-      }
-      const double dt = tv - shifts_[2 * p], dr = rv - shifts_[2 * p + 1], de = dt - dr;
-      const double denominator = rv * rv + kRelMseEpsilon;
-      const double w = 1 / denominator;
-      float* cell = block_cells + static_cast<size_t>(p) * kPixelSums;
-      cell[S::kPixelT] += static_cast<float>(dt);
-      cell[S::kPixelR] += static_cast<float>(dr);
-      cell[S::kPixelWeight] += static_cast<float>(w);
-      cell[S::kPixelWeightedE] += static_cast<float>(w * de);
-      squares[S::kSquareSumT] += dt * dt;
-      squares[S::kSquareSumR] += dr * dr;
-      squares[S::kSquareSumE] += de * de;
-      squares[S::kSquareRelative] += terms.relative2[x];  // e^2 / denominator
-      squares[S::kSquareWeightedE2] += w * de * de;
-      double* joint = joint_.data() + 3 * static_cast<size_t>(p);
-      joint[0] += w, joint[1] += w * e, joint[2] += w * e * e;
-      if (se_row && std::isfinite(se_row[x])) {
-        const double s2 = double(se_row[x]) * se_row[x];
-        noise_[p] += s2;
-        weighted_noise_[p] += w * s2;
-        // d/dR of E^2 / (R^2 + eps), with E = T - R (the delta method).
-        const double slope = -2 * e / denominator - 2 * rv * e * e / (denominator * denominator);
-        relmse_noise_[p] += slope * slope * s2;
-      }
-    }
-    if (!any) continue;
-    const size_t t = static_cast<size_t>(y / tile) * tiles_x_ + x0 / tile;
+  const detail::CellRowInput in{.width = setup_.width,
+                                .tile = tile,
+                                .test = tv_row,
+                                .reference = rv_row,
+                                .reference_stderr = se_row,
+                                .region_index = region_index_.data() + static_cast<size_t>(y) * setup_.width,
+                                .updated = terms.updated,
+                                .relative2 = terms.relative2,
+                                .first_frame = frames_added_ == 0};
+  const bool noise = se_row != nullptr;
+  detail::CellRowState state{.shifts = shifts_.data(),
+                             .cells = block_cells,
+                             .joint = joint_.data(),
+                             .noise = noise ? noise_.data() : nullptr,
+                             .weighted_noise = noise ? weighted_noise_.data() : nullptr,
+                             .relmse_noise = noise ? relmse_noise_.data() : nullptr};
+  detail::AddCellRow(in, state, tile_squares.data(), tile_any.data());
+  for (int tx = 0; tx < tiles_x_; ++tx) {
+    if (!tile_any[tx]) continue;
+    const size_t t = static_cast<size_t>(y / tile) * tiles_x_ + tx;
     double* tile_row = squares_.data() + t * kSquareSums * blocks;
-    for (int kind = 0; kind < kSquareSums; ++kind) tile_row[kind * blocks + block] += squares[kind];
+    for (int kind = 0; kind < kSquareSums; ++kind) tile_row[kind * blocks + block] += tile_squares[tx * kSquareSums + kind];
   }
 }
 
@@ -213,6 +192,8 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
   cv::parallel_for_(cv::Range(0, (height + tile - 1) / tile), [&](const cv::Range& range) {
     std::vector<double> row_terms(4 * static_cast<size_t>(width));
     std::vector<uint8_t> updated(width);
+    std::vector<double> tile_squares(has_ref ? static_cast<size_t>(tiles_x_) * kSquareSums : 0);
+    std::vector<uint8_t> tile_any(has_ref ? tiles_x_ : 0);
     for (int y = range.start * tile; y < std::min(range.end * tile, height); ++y) {
       const size_t row = static_cast<size_t>(y) * width;
       const float* tv_row = T.ptr<float>(y);
@@ -255,7 +236,7 @@ void MetricsAccumulator::AddFrame(const cv::Mat& T, const cv::Mat& Rf, const cv:
       }
       if (has_ref)
         AddCellRow(y, tv_row, rv_row, with_stderr ? reference_stderr.ptr<float>(y) : nullptr, terms, block_cells,
-                   block);
+                   block, tile_squares, tile_any);
     }
   });
 

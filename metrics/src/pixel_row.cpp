@@ -2,6 +2,7 @@
 
 #include <immintrin.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -160,6 +161,133 @@ __attribute__((target("avx2"))) void UpdateRowAvx2(const PixelRowInput& in, Pixe
   for (; x < in.width; ++x) UpdatePixel(in, s, t, x);
 }
 
+using S = TileBlockStatistics;
+
+// One updated pixel of AddCellRow into its cell, joint and noise sums and its
+// tile's `squares`: the reference for the vector lanes below.
+inline void AddCellPixel(const CellRowInput& in, CellRowState& s, int x, double* squares) {
+  const double tv = in.test[x], rv = in.reference[x];
+  const double e = tv - rv;
+  const size_t p = static_cast<size_t>(in.region_index[x]);
+  if (in.first_frame) {
+    s.shifts[2 * p] = static_cast<float>(tv);
+    s.shifts[2 * p + 1] = static_cast<float>(rv);
+  }
+  const double dt = tv - s.shifts[2 * p], dr = rv - s.shifts[2 * p + 1], de = dt - dr;
+  const double denominator = rv * rv + kRelMseEpsilon;
+  const double w = 1 / denominator;
+  float* cell = s.cells + p * S::kPixelSums;
+  cell[S::kPixelT] += static_cast<float>(dt);
+  cell[S::kPixelR] += static_cast<float>(dr);
+  cell[S::kPixelWeight] += static_cast<float>(w);
+  cell[S::kPixelWeightedE] += static_cast<float>(w * de);
+  squares[S::kSquareSumT] += dt * dt;
+  squares[S::kSquareSumR] += dr * dr;
+  squares[S::kSquareSumE] += de * de;
+  squares[S::kSquareRelative] += in.relative2[x];  // e^2 / denominator
+  squares[S::kSquareWeightedE2] += w * de * de;
+  double* joint = s.joint + 3 * p;
+  joint[0] += w, joint[1] += w * e, joint[2] += w * e * e;
+  if (in.reference_stderr && std::isfinite(in.reference_stderr[x])) {
+    const double s2 = double(in.reference_stderr[x]) * in.reference_stderr[x];
+    s.noise[p] += s2;
+    s.weighted_noise[p] += w * s2;
+    // d/dR of E^2 / (R^2 + eps), with E = T - R (the delta method).
+    const double slope = -2 * e / denominator - 2 * rv * e * e / (denominator * denominator);
+    s.relmse_noise[p] += slope * slope * s2;
+  }
+}
+
+// at[0..3] += term in the lanes `where` is set.
+__attribute__((target("avx2"))) inline void AddWhere(double* at, __m256d term, __m256d where) {
+  const __m256d old = _mm256_loadu_pd(at);
+  _mm256_storeu_pd(at, _mm256_blendv_pd(old, _mm256_add_pd(old, term), where));
+}
+
+// Four updated pixels x..x+3: all in the region, so their region indices
+// are consecutive and their cells, joint and noise sums lie side by side.
+__attribute__((target("avx2"))) inline void AddCellPixels4(const CellRowInput& in, CellRowState& s, int x,
+                                                           double* squares) {
+  static_assert(S::kPixelT == 0 && S::kPixelR == 1 && S::kPixelWeight == 2 && S::kPixelWeightedE == 3 &&
+                S::kPixelSums == 4);
+  const __m256d tv = _mm256_cvtps_pd(_mm_loadu_ps(in.test + x)), rv = _mm256_cvtps_pd(_mm_loadu_ps(in.reference + x));
+  const __m256d e = _mm256_sub_pd(tv, rv);
+  const size_t p = static_cast<size_t>(in.region_index[x]);
+  float* shifts = s.shifts + 2 * p;
+  if (in.first_frame) {
+    const __m128 t32 = _mm256_cvtpd_ps(tv), r32 = _mm256_cvtpd_ps(rv);
+    _mm_storeu_ps(shifts, _mm_unpacklo_ps(t32, r32));
+    _mm_storeu_ps(shifts + 4, _mm_unpackhi_ps(t32, r32));
+  }
+  const __m128 pairs_lo = _mm_loadu_ps(shifts), pairs_hi = _mm_loadu_ps(shifts + 4);
+  const __m256d t0 = _mm256_cvtps_pd(_mm_shuffle_ps(pairs_lo, pairs_hi, _MM_SHUFFLE(2, 0, 2, 0)));
+  const __m256d r0 = _mm256_cvtps_pd(_mm_shuffle_ps(pairs_lo, pairs_hi, _MM_SHUFFLE(3, 1, 3, 1)));
+  const __m256d dt = _mm256_sub_pd(tv, t0), dr = _mm256_sub_pd(rv, r0), de = _mm256_sub_pd(dt, dr);
+  const __m256d denominator = _mm256_add_pd(_mm256_mul_pd(rv, rv), _mm256_set1_pd(kRelMseEpsilon));
+  const __m256d w = _mm256_div_pd(_mm256_set1_pd(1.0), denominator);
+  const __m256d w_de = _mm256_mul_pd(w, de);
+
+  // The four cells, pixel-major: transpose the four sums' lanes.
+  __m128 cell_t = _mm256_cvtpd_ps(dt), cell_r = _mm256_cvtpd_ps(dr), cell_w = _mm256_cvtpd_ps(w),
+         cell_we = _mm256_cvtpd_ps(w_de);
+  _MM_TRANSPOSE4_PS(cell_t, cell_r, cell_w, cell_we);
+  float* cells = s.cells + p * S::kPixelSums;
+  _mm_storeu_ps(cells, _mm_add_ps(_mm_loadu_ps(cells), cell_t));
+  _mm_storeu_ps(cells + 4, _mm_add_ps(_mm_loadu_ps(cells + 4), cell_r));
+  _mm_storeu_ps(cells + 8, _mm_add_ps(_mm_loadu_ps(cells + 8), cell_w));
+  _mm_storeu_ps(cells + 12, _mm_add_ps(_mm_loadu_ps(cells + 12), cell_we));
+
+  // The tile's sums and the joint sums, one lane after the other (pixel order).
+  alignas(32) double lanes[8][4];
+  _mm256_store_pd(lanes[0], _mm256_mul_pd(dt, dt));
+  _mm256_store_pd(lanes[1], _mm256_mul_pd(dr, dr));
+  _mm256_store_pd(lanes[2], _mm256_mul_pd(de, de));
+  _mm256_store_pd(lanes[3], _mm256_loadu_pd(in.relative2 + x));
+  _mm256_store_pd(lanes[4], _mm256_mul_pd(w_de, de));
+  const __m256d w_e = _mm256_mul_pd(w, e);
+  _mm256_store_pd(lanes[5], w);
+  _mm256_store_pd(lanes[6], w_e);
+  _mm256_store_pd(lanes[7], _mm256_mul_pd(w_e, e));
+  double* joint = s.joint + 3 * p;
+  for (int j = 0; j < 4; ++j) {
+    squares[S::kSquareSumT] += lanes[0][j];
+    squares[S::kSquareSumR] += lanes[1][j];
+    squares[S::kSquareSumE] += lanes[2][j];
+    squares[S::kSquareRelative] += lanes[3][j];
+    squares[S::kSquareWeightedE2] += lanes[4][j];
+    joint[3 * j] += lanes[5][j];
+    joint[3 * j + 1] += lanes[6][j];
+    joint[3 * j + 2] += lanes[7][j];
+  }
+
+  if (!in.reference_stderr) return;
+  const __m128 se = _mm_loadu_ps(in.reference_stderr + x);
+  const __m128 finite32 = _mm_cmplt_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), se), _mm_set1_ps(HUGE_VALF));
+  if (_mm_movemask_ps(finite32) == 0) return;
+  const __m256d finite = _mm256_castsi256_pd(_mm256_cvtepi32_epi64(_mm_castps_si128(finite32)));
+  const __m256d se64 = _mm256_cvtps_pd(se);
+  const __m256d s2 = _mm256_mul_pd(se64, se64);
+  const __m256d two = _mm256_set1_pd(2.0);
+  const __m256d slope = _mm256_sub_pd(
+      _mm256_div_pd(_mm256_mul_pd(_mm256_set1_pd(-2.0), e), denominator),
+      _mm256_div_pd(_mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(two, rv), e), e), _mm256_mul_pd(denominator, denominator)));
+  AddWhere(s.noise + p, s2, finite);
+  AddWhere(s.weighted_noise + p, _mm256_mul_pd(w, s2), finite);
+  AddWhere(s.relmse_noise + p, _mm256_mul_pd(_mm256_mul_pd(slope, slope), s2), finite);
+}
+
+// Runs `pixels(x0, x1, squares)` over each tile's pixel range of the row,
+// with the tile's sums zeroed first; `pixels` says whether any pixel entered.
+template <class Pixels>
+inline void ForEachTile(const CellRowInput& in, double* tile_squares, uint8_t* tile_any, Pixels pixels) {
+  const int tiles = (in.width + in.tile - 1) / in.tile;
+  for (int t = 0; t < tiles; ++t) {
+    double* squares = tile_squares + static_cast<size_t>(t) * S::kSquareSums;
+    std::fill(squares, squares + S::kSquareSums, 0.0);
+    tile_any[t] = pixels(t * in.tile, std::min((t + 1) * in.tile, in.width), squares);
+  }
+}
+
 }  // namespace
 
 void UpdatePixelRow(const PixelRowInput& in, PixelRowState& state, PixelRowTerms& terms) {
@@ -170,6 +298,47 @@ void UpdatePixelRow(const PixelRowInput& in, PixelRowState& state, PixelRowTerms
 
 void UpdatePixelRowScalar(const PixelRowInput& in, PixelRowState& state, PixelRowTerms& terms) {
   for (int x = 0; x < in.width; ++x) UpdatePixel(in, state, terms, x);
+}
+
+__attribute__((target("avx2"))) static void AddCellRowAvx2(const CellRowInput& in, CellRowState& state,
+                                                           double* tile_squares, uint8_t* tile_any) {
+  ForEachTile(in, tile_squares, tile_any, [&](int x0, int x1, double* squares) __attribute__((target("avx2"))) {
+    bool any = false;
+    for (int x = x0; x < x1;) {
+      uint32_t four = 0;
+      if (x + 4 <= x1) std::memcpy(&four, in.updated + x, 4);
+      if (four == 0x01010101u) {  // four updated pixels
+        AddCellPixels4(in, state, x, squares);
+        any = true;
+        x += 4;
+        continue;
+      }
+      if (in.updated[x]) {
+        AddCellPixel(in, state, x, squares);
+        any = true;
+      }
+      ++x;
+    }
+    return any;
+  });
+}
+
+void AddCellRow(const CellRowInput& in, CellRowState& state, double* tile_squares, uint8_t* tile_any) {
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return AddCellRowAvx2(in, state, tile_squares, tile_any);
+  AddCellRowScalar(in, state, tile_squares, tile_any);
+}
+
+void AddCellRowScalar(const CellRowInput& in, CellRowState& state, double* tile_squares, uint8_t* tile_any) {
+  ForEachTile(in, tile_squares, tile_any, [&](int x0, int x1, double* squares) {
+    bool any = false;
+    for (int x = x0; x < x1; ++x)
+      if (in.updated[x]) {
+        AddCellPixel(in, state, x, squares);
+        any = true;
+      }
+    return any;
+  });
 }
 
 }  // namespace shimmer::metrics::detail

@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "shimmer/metrics/block_bootstrap.h"
 #include "shimmer/metrics/temporal_variance.h"
 
 namespace shimmer::metrics::detail {
@@ -53,5 +54,37 @@ void UpdatePixelRow(const PixelRowInput& in, PixelRowState& state, PixelRowTerms
 // One pixel at a time: what every vector lane must reproduce bit for bit
 // (tests/metrics/pixel_row_test.cpp holds the two against each other).
 void UpdatePixelRowScalar(const PixelRowInput& in, PixelRowState& state, PixelRowTerms& terms);
+
+// The bootstrap's and relMSE split's part of a row, with a reference (what
+// MetricsAccumulator::AddCellRow adds): for each pixel UpdatePixelRow
+// updated, its first moments into its cell of the frame's block, relMSE's
+// joint sums and the reference noise's sums; per tile of the row, the sums
+// that enter the tile linearly. The same contract as UpdatePixelRow: four
+// pixels at a time where the CPU has AVX2, every lane the scalar code's double
+// arithmetic, each tile's sums added in pixel order, so bit for bit the same.
+struct CellRowInput {
+  int width = 0;
+  int tile = 0;  // the bootstrap's tile side
+  const float* test = nullptr;
+  const float* reference = nullptr;
+  const float* reference_stderr = nullptr;  // null: no noise sums this frame
+  const int* region_index = nullptr;        // the row's pixels' indices among the region's, -1 outside
+  const uint8_t* updated = nullptr;         // PixelRowTerms::updated
+  const double* relative2 = nullptr;        // PixelRowTerms::relative2
+  bool first_frame = false;                 // the shifts (t0, r0) are this frame's values
+};
+
+struct CellRowState {
+  float* shifts;  // (t0, r0) per region pixel
+  float* cells;   // TileBlockStatistics::kPixelSums per region pixel, this frame's block
+  double* joint;  // sum w, sum w E, sum w E^2 per region pixel
+  double *noise, *weighted_noise, *relmse_noise;  // per region pixel; null without stderr
+};
+
+// Per tile of the row (ceil(width / tile) of them): its kSquareSums sums into
+// tile_squares[tile * kSquareSums ...] and whether any pixel entered into
+// tile_any[tile]; a tile with none has zeros.
+void AddCellRow(const CellRowInput& in, CellRowState& state, double* tile_squares, uint8_t* tile_any);
+void AddCellRowScalar(const CellRowInput& in, CellRowState& state, double* tile_squares, uint8_t* tile_any);
 
 }  // namespace shimmer::metrics::detail

@@ -133,6 +133,85 @@ TEST_P(PixelRowLanes, MatchTheOnePixelCodeBitForBit) {
   }
 }
 
+// AddCellRow's lanes against its one-pixel code: rows with region holes and
+// pixels not updated (so four-pixel runs start anywhere), reference noise
+// that is sometimes NaN or infinite or absent, tiles that are not a multiple
+// of four wide, and the first frame's shifts.
+TEST(CellRowLanes, MatchTheOnePixelCodeBitForBit) {
+  if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "no AVX2: AddCellRow is the one-pixel code itself";
+  constexpr int kSums = TileBlockStatistics::kPixelSums, kSquares = TileBlockStatistics::kSquareSums;
+  for (const int width : {3, 9, 64, 131})
+    for (const int tile : {4, 6, 8}) {
+      std::mt19937 rng(99 + width * 10 + tile);
+      std::vector<int> region_index(width, -1);
+      int pixels = 0;
+      for (auto& index : region_index)
+        if (rng() % 6 != 0) index = pixels++;
+      struct Sums {
+        std::vector<float> shifts, cells;
+        std::vector<double> joint, noise, weighted_noise, relmse_noise, squares;
+        std::vector<uint8_t> any;
+        CellRowState State() {
+          return {shifts.data(), cells.data(), joint.data(), noise.data(), weighted_noise.data(), relmse_noise.data()};
+        }
+      };
+      const int tiles = (width + tile - 1) / tile;
+      Sums vector_sums{std::vector<float>(2 * pixels), std::vector<float>(kSums * pixels),
+                       std::vector<double>(3 * pixels), std::vector<double>(pixels), std::vector<double>(pixels),
+                       std::vector<double>(pixels), std::vector<double>(kSquares * tiles), std::vector<uint8_t>(tiles)};
+      Sums scalar_sums = vector_sums;
+      std::vector<float> test(width), reference(width), noise(width);
+      std::vector<uint8_t> updated(width);
+      std::vector<double> relative2(width);
+      int runs_of_four = 0;
+      for (int frame = 0; frame < 10; ++frame) {
+        std::uniform_real_distribution<float> u(0, 1);
+        for (int x = 0; x < width; ++x) {
+          updated[x] = region_index[x] >= 0 && u(rng) < 0.9f;
+          test[x] = std::exp(12 * u(rng) - 8) * (u(rng) < 0.1f ? -1 : 1);
+          reference[x] = std::exp(12 * u(rng) - 8);
+          const float pick = u(rng);
+          noise[x] = pick < 0.05f ? std::numeric_limits<float>::quiet_NaN()
+                     : pick < 0.08f ? std::numeric_limits<float>::infinity()
+                                    : 0.01f * reference[x] * u(rng);
+          const double e = double(test[x]) - reference[x];
+          relative2[x] = e * e / (double(reference[x]) * reference[x] + kRelMseEpsilon);
+        }
+        for (int x = 0; x + 4 <= width; ++x)
+          runs_of_four += updated[x] && updated[x + 1] && updated[x + 2] && updated[x + 3];
+        const CellRowInput in{.width = width,
+                              .tile = tile,
+                              .test = test.data(),
+                              .reference = reference.data(),
+                              .reference_stderr = frame % 4 == 3 ? nullptr : noise.data(),
+                              .region_index = region_index.data(),
+                              .updated = updated.data(),
+                              .relative2 = relative2.data(),
+                              .first_frame = frame == 0};
+        CellRowState vector_state = vector_sums.State(), scalar_state = scalar_sums.State();
+        AddCellRow(in, vector_state, vector_sums.squares.data(), vector_sums.any.data());
+        AddCellRowScalar(in, scalar_state, scalar_sums.squares.data(), scalar_sums.any.data());
+        SCOPED_TRACE("width " + std::to_string(width) + ", tile " + std::to_string(tile) + ", frame " +
+                     std::to_string(frame));
+        ASSERT_TRUE(SameBits(vector_sums.shifts, scalar_sums.shifts));
+        ASSERT_TRUE(SameBits(vector_sums.cells, scalar_sums.cells));
+        ASSERT_TRUE(SameBits(vector_sums.joint, scalar_sums.joint));
+        ASSERT_TRUE(SameBits(vector_sums.noise, scalar_sums.noise));
+        ASSERT_TRUE(SameBits(vector_sums.weighted_noise, scalar_sums.weighted_noise));
+        ASSERT_TRUE(SameBits(vector_sums.relmse_noise, scalar_sums.relmse_noise));
+        ASSERT_TRUE(SameBits(vector_sums.squares, scalar_sums.squares));
+        ASSERT_TRUE(SameBits(vector_sums.any, scalar_sums.any));
+      }
+      // The sums moved, and the lanes ran.
+      double total = 0;
+      for (double j : scalar_sums.joint) total += j;
+      EXPECT_GT(total, 0);
+      if (width >= 64) {
+        EXPECT_GT(runs_of_four, 0);
+      }
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(Reference, PixelRowLanes, ::testing::Bool(),
                          [](const auto& info) { return info.param ? "WithReference" : "TestOnly"; });
 

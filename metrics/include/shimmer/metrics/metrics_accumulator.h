@@ -4,7 +4,9 @@
 // sequences (ComputeMetrics), or a renderer's frames in memory.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -80,7 +82,8 @@ class MetricsAccumulator {
   };
   SparkleTracks TracksOf(const cv::Mat& motion, const cv::Mat& reference_motion);
   void AddCellRow(int y, const float* test_row, const float* reference_row, const float* stderr_row,
-                  const detail::PixelRowTerms& terms, float* block_cells, int block);
+                  const detail::PixelRowTerms& terms, float* block_cells, int block, std::vector<double>& tile_squares,
+                  std::vector<uint8_t>& tile_any);
 
   // The bootstrap's sums (with a reference): per (block, region pixel),
   // block-major, a pixel's first moments (kPixelSums floats); per (tile,

@@ -264,7 +264,7 @@ DeviceCache& Devices() {
 }  // namespace
 
 bool CountsGlints(int variant_id) {
-  for (const char* name : {"glints-zk16-counting", "glints-db23"})
+  for (const char* name : {"glints-zk16-counting", "glints-db23", "glints-points"})
     if (const shading::VariantInfo* info = shading::FindVariant(name); info && info->id == variant_id) return true;
   return false;
 }

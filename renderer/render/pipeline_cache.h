@@ -36,7 +36,7 @@ Result<std::shared_ptr<const KernelModule>> KernelSpirv(std::string_view kernel,
                                                         bool counted_glints = false);
 
 // Whether the variant is one of the glint variants that count the
-// footprint's microdetails (glints-zk16-counting, glints-db23): their kernel
+// footprint's microdetails (glints-zk16-counting, glints-db23, glints-points): their kernel
 // is compiled with SHIMMER_COUNTED_GLINTS (glints.glsl). Every other kernel
 // leaves their dispatch out, so that adding them left its SPIR-V, and the
 // job ids built on it, as they were.

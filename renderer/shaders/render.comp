@@ -386,10 +386,16 @@ void shadePixelCentre(PixelLane pl, bool inside, int idx, Camera c, Camera prev,
     f = turnedFootprint(f, fc.lobe.angle);
   }
   FilteredNdf ndf;
-  if (MATERIAL_NDF == NDF_GLINTS)
+  if (MATERIAL_NDF == NDF_GLINTS) {
+#ifdef SHIMMER_COUNTED_GLINTS
+    // glints-points lights each microdetail at its own half vector.
+    gf.dhppdx = f.dhpp_dx;
+    gf.dhppdy = f.dhpp_dy;
+#endif
     ndf = glintNdfOf(VARIANT_ID, m, s, gf);
-  else
+  } else {
     ndf = runVariant(m.ndf, m.alpha, f, vp);
+  }
   PixelShade sh = shadeSample(s, f, ndf, m, light, VARIANT_ID, vp, QUADRATURE);
   if (!inside) return;
   put3(CH_BEAUTY, idx, sh.specular + sh.diffuse);

@@ -32,6 +32,7 @@ const int GLINT_NAIVE = 2;     // glints-naive: the level-0 cell holding the poi
 const int GLINT_SMOOTH = 3;    // glints-smooth: D_g itself
 const int GLINT_COUNTING = 4;  // glints-zk16-counting: zk16's cells and bins, their weights distributing the count
 const int GLINT_DB23 = 5;      // glints-db23: Deliot and Belcour's anisotropic grids, the count distributed
+const int GLINT_POINTS = 6;    // glints-points: point microdetails in the footprint, each at its own half vector
 
 // Seed 001, "Performance": maximum anisotropy 16x.
 const int GLINT_MAX_ANISOTROPY = 16;
@@ -57,6 +58,11 @@ struct GlintFootprint {
   vec2 duvdx;
   vec2 duvdy;
   real areaScale;
+  // The slope-space half vector's change per pixel (ShadingFootprint's
+  // dhpp_dx, dhpp_dy): where in the footprint a microdetail lies decides the
+  // half vector it reflects at (glints-points). Zero: one half vector.
+  vec2 dhppdx;
+  vec2 dhppdy;
 };
 
 vec2 glintGlobalAlpha(GlintMaterial g) {
@@ -540,8 +546,220 @@ real glintDb23Level(GlintMaterial g, int level, GlintEllipse el, real cellMinor,
   return count;
 }
 
-// The count of the two models that keep the binomial law (GLINT_COUNTING,
-// GLINT_DB23) for the footprint fp at hpp.
+// ---- glints-points: point microdetails at their own half vectors ------------
+// shimmer's own model (docs/glints.md, "glints-points"). The counting models
+// above shade every microdetail of the footprint at the pixel centre's half
+// vector, and give every pixel that reads a cell a share of that cell's
+// microdetails drawn with the cell's one uniform. On a curved surface the
+// half vector changes by about a slope bin across a pixel, so a microdetail
+// lights or goes dark whenever the pixel centre it is read with changes:
+// under dolly their sparkles lived 0.56-0.88 of the reference's. Here the
+// microdetails are points, as in the reference: a cell draws its count per
+// slope bin once (B(n, p_bin), n the cell's own expected microdetails), places
+// each at a uniform point of the cell, and a pixel counts those inside its
+// footprint (the parallelogram the pixel's box maps to), each weighted by its
+// lobe at the half vector of the point where it lies, hpp + a dhpp/dx +
+// b dhpp/dy at footprint coordinates (a, b). A point lies in one pixel and
+// keeps its half vector as it crosses into the next: it is lit until its
+// half vector leaves its bin's lobe, as the reference's are.
+//
+// Counting: each of the cell's k points lies in the footprint with the
+// probability of the overlap's share of the cell, independently, so the
+// pixel's count is the cell counts thinned by area, which keeps the
+// binomial law over the footprint's N = area x density microdetails (for a
+// constant half vector, the same lobe-weighted law as the other counting
+// models). Levels: a cell about the footprint's short axis wide (at least
+// 1/16 of the long axis, as glintLod), trilinear between two levels by
+// which points exist: a point at level l0 exists when its own uniform is
+// below 1 - t, at l0 + 1 below t, so the expected count is N m1 at any t
+// and a point born or dying as t moves is the only change.
+const int GLINT_POINTS_MAX_CELLS = 96;  // cells one level of a footprint reads (a 16:1 footprint reads ~40)
+const int GLINT_POINTS_MAX_BINS = 8;    // slope bins per axis: the footprint's spread of half vectors (+- 3 bins)
+const int GLINT_POINTS_MAX_PLACED = 32; // points placed per (cell, bin); beyond, the covered share draws them
+
+// A footprint as glints-points reads it, in level-0 cells: centre p, axes
+// dx, dy (per pixel) and the rows of their inverse (a point q lies at
+// footprint coordinates (dot(toA, q - p), dot(toB, q - p))), and the half
+// vector at the centre with its change per pixel.
+struct GlintPointsFootprint {
+  vec2 p;
+  // The centre in world-scaled uv and the level-0 cell's side: a point's
+  // offset from the centre is formed in uv, where float holds the position
+  // about 100 times finer than in cell units (~2000 cells on glint-sphere),
+  // since the half vector at the point multiplies that offset's error.
+  vec2 uv;
+  real cellSize;
+  vec2 dx;
+  vec2 dy;
+  vec2 toA;
+  vec2 toB;
+  vec2 hpp;
+  vec2 dhppdx;
+  vec2 dhppdy;
+};
+
+// The x-range of the parallelogram v0 v1 v2 v3 (in order) within the band
+// y0 <= y <= y1: its corners in the band and its edges' crossings of y0, y1.
+vec2 glintBandRange(vec2 v0, vec2 v1, vec2 v2, vec2 v3, real y0, real y1) {
+  real lo = real(1e30);
+  real hi = real(-1e30);
+  for (int i = 0; i < 4; i++) {
+    vec2 a = i == 0 ? v0 : (i == 1 ? v1 : (i == 2 ? v2 : v3));
+    vec2 b = i == 0 ? v1 : (i == 1 ? v2 : (i == 2 ? v3 : v0));
+    if (a.y >= y0 && a.y <= y1) {
+      lo = min(lo, a.x);
+      hi = max(hi, a.x);
+    }
+    for (int k = 0; k < 2; k++) {
+      real y = k == 0 ? y0 : y1;
+      if ((a.y - y) * (b.y - y) <= real(0) && a.y != b.y) {
+        real x = a.x + (b.x - a.x) * (y - a.y) / (b.y - a.y);
+        lo = min(lo, x);
+        hi = max(hi, x);
+      }
+    }
+  }
+  return vec2(lo, hi);
+}
+
+// The share of the unit cell `cell` (in the units of the corners) that the
+// parallelogram v0 v1 v2 v3 covers (.x), and the covered part's centroid
+// (.yz): its height over 16 columns of the cell (midpoint rule; continuous
+// as the parallelogram moves, within about 1 % of the exact share).
+vec3 glintCellCover(vec2 v0, vec2 v1, vec2 v2, vec2 v3, ivec2 cell) {
+  const int columns = 16;
+  real area = real(0);
+  vec2 moment = vec2(real(0), real(0));
+  for (int i = 0; i < columns; i++) {
+    real x = real(cell.x) + (real(i) + real(0.5)) / real(columns);
+    // The parallelogram's extent along y at x: the band routine with the axes swapped.
+    vec2 r = glintBandRange(vec2(v0.y, v0.x), vec2(v1.y, v1.x), vec2(v2.y, v2.x), vec2(v3.y, v3.x), x, x);
+    real lo = max(r.x, real(cell.y));
+    real hi = min(r.y, real(cell.y + 1));
+    if (!(hi > lo)) continue;
+    area += hi - lo;
+    moment += vec2(x * (hi - lo), real(0.5) * (hi * hi - lo * lo));
+  }
+  if (!(area > real(0))) return vec3(real(0), real(cell.x) + real(0.5), real(cell.y) + real(0.5));
+  return vec3(area / real(columns), moment.x / area, moment.y / area);
+}
+
+// The lobe-weighted count of one cell's points inside the footprint: n the
+// cell's expected microdetails, `exist` the share of this level.
+real glintPointsCell(GlintMaterial g, int level, ivec2 cell, GlintPointsFootprint f, vec3 cover, real n, real w,
+                     real exist) {
+  vec2 a = clampAlpha(g.alpha);
+  uint ch = glintCellHash(level, cell);
+  vec2 offset = vec2(glintUniform(ch), glintUniform(glintHash(ch)));
+  vec2 t = f.hpp / w - offset - vec2(real(0.5), real(0.5));  // bin b's centre at t = b, as glintCellCount
+  vec2 tx = f.dhppdx / w;
+  vec2 ty = f.dhppdy / w;
+  vec2 reach = real(0.5) * (abs(tx) + abs(ty));  // the footprint's half spread of t
+  ivec2 lo = ivec2(floor(t - reach));
+  ivec2 hi = min(ivec2(floor(t + reach)) + ivec2(1, 1), lo + ivec2(GLINT_POINTS_MAX_BINS - 1));
+  real size = exp2(real(level));
+  real count = real(0);
+  SHIMMER_DONT_UNROLL
+  for (int by = lo.y; by <= hi.y; by++) {
+    real py = glintInterval((real(by) + offset.y) * w, (real(by) + offset.y + real(1)) * w, a.y);
+    SHIMMER_DONT_UNROLL
+    for (int bx = lo.x; bx <= hi.x; bx++) {
+      real px = glintInterval((real(bx) + offset.x) * w, (real(bx) + offset.x + real(1)) * w, a.x);
+      uint bh = glintBinHash(ch, ivec2(bx, by));
+      real k = glintDraw(n, px * py, bh);
+      if (k > real(GLINT_POINTS_MAX_PLACED)) {
+        // Many points: how many lie inside is B(k, the covered share),
+        // drawn once per (cell, bin), lit at the covered part's centroid.
+        real inside = glintBinomial(k, cover.x * exist, glintUniform(glintHash(bh ^ 0x5bd1e995u)), real(0.5));
+        vec2 centre = (vec2(cover.y, cover.z) * (size * f.cellSize) - f.uv) / f.cellSize;
+        vec2 at = t + dot(f.toA, centre) * tx + dot(f.toB, centre) * ty;
+        count += inside * max(real(1) - abs(at.x - real(bx)), real(0)) * max(real(1) - abs(at.y - real(by)), real(0));
+        continue;
+      }
+      int placed = int(k);
+      real lit = real(0);
+      SHIMMER_DONT_UNROLL
+      for (int j = 0; j < placed; j++) {
+        uint hx = glintHash(bh ^ (uint(j) * 0x9e3779b9u + 0x85ebca6bu));
+        uint hy = glintHash(hx);
+        if (!(glintUniform(glintHash(hy)) < exist)) continue;
+        vec2 q = ((vec2(cell) + vec2(glintUniform(hx), glintUniform(hy))) * (size * f.cellSize) - f.uv) / f.cellSize;
+        real fa = dot(f.toA, q);
+        real fb = dot(f.toB, q);
+        if (!(abs(fa) <= real(0.5) && abs(fb) <= real(0.5))) continue;
+        vec2 at = t + fa * tx + fb * ty;  // the point's own half vector, in bins
+        lit += max(real(1) - abs(at.x - real(bx)), real(0)) * max(real(1) - abs(at.y - real(by)), real(0));
+      }
+      count += lit;
+    }
+  }
+  return count;
+}
+
+// One level's points in the footprint: the cells it overlaps, row by row
+// (each cell once), `exist` the level's share.
+real glintPointsLevel(GlintMaterial g, int level, GlintPointsFootprint f, real areaScale, real w, real exist) {
+  if (!(exist > real(0))) return real(0);
+  real size = exp2(real(level));
+  real n = areaScale * size * size;
+  vec2 v0 = (f.p - real(0.5) * f.dx - real(0.5) * f.dy) / size;
+  vec2 v1 = (f.p + real(0.5) * f.dx - real(0.5) * f.dy) / size;
+  vec2 v2 = (f.p + real(0.5) * f.dx + real(0.5) * f.dy) / size;
+  vec2 v3 = (f.p - real(0.5) * f.dx + real(0.5) * f.dy) / size;
+  int y0 = int(floor(min(min(v0.y, v1.y), min(v2.y, v3.y))));
+  int y1 = int(floor(max(max(v0.y, v1.y), max(v2.y, v3.y))));
+  real count = real(0);
+  int cells = 0;
+  SHIMMER_DONT_UNROLL
+  for (int cy = y0; cy <= y1 && cells < GLINT_POINTS_MAX_CELLS; cy++) {
+    vec2 r = glintBandRange(v0, v1, v2, v3, real(cy), real(cy + 1));
+    if (!(r.x <= r.y)) continue;
+    SHIMMER_DONT_UNROLL
+    for (int cx = int(floor(r.x)); cx <= int(floor(r.y)) && cells < GLINT_POINTS_MAX_CELLS; cx++) {
+      cells++;
+      count += glintPointsCell(g, level, ivec2(cx, cy), f, glintCellCover(v0, v1, v2, v3, ivec2(cx, cy)), n, w, exist);
+    }
+  }
+  return count;
+}
+
+// glints-points' count for the footprint (dx, dy in level-0 cells, p its
+// centre). A footprint under one cell is read as a cell-sized square of its
+// orientation: N counts it as one microdetail's area (glintFootprintMicrodetails).
+real glintPointsCount(GlintMaterial g, vec2 uv, real cellSize, vec2 p, vec2 dx, vec2 dy, vec2 hpp, vec2 dhppdx,
+                      vec2 dhppdy, real areaScale, real w) {
+  real area = abs(cross2(dx, dy));
+  if (!(area >= real(1))) {
+    if (area > real(1e-12)) {
+      dx /= sqrt(area);
+      dy /= sqrt(area);
+    } else {
+      dx = vec2(real(1), real(0));
+      dy = vec2(real(0), real(1));
+    }
+  }
+  real det = dx.x * dy.y - dx.y * dy.x;
+  GlintPointsFootprint f;
+  f.p = p;
+  f.uv = uv;
+  f.cellSize = cellSize;
+  f.dx = dx;
+  f.dy = dy;
+  f.toA = vec2(dy.y, -dy.x) / det;
+  f.toB = vec2(-dx.y, dx.x) / det;
+  f.hpp = hpp;
+  f.dhppdx = glintFinite(dhppdx);
+  f.dhppdy = glintFinite(dhppdy);
+  GlintEllipse el = glintEllipse(dx, dy);
+  real cellMinor = max(max(el.minor, el.major / real(GLINT_MAX_ANISOTROPY)), real(1));
+  real level = clamp(log2(cellMinor), real(0), real(GLINT_MAX_LEVEL));
+  int l0 = min(int(floor(level)), GLINT_MAX_LEVEL - 1);
+  real t = level - real(l0);
+  return glintPointsLevel(g, l0, f, areaScale, w, real(1) - t) + glintPointsLevel(g, l0 + 1, f, areaScale, w, t);
+}
+
+// The count of the three models that keep the binomial law (GLINT_COUNTING,
+// GLINT_DB23, GLINT_POINTS) for the footprint fp at hpp.
 GlintCount glintCountedDraws(int mode, GlintMaterial g, vec2 hpp, GlintFootprint fp) {
   GlintCount o;
   real w = real(1.41421356237309505) * clamp(g.alphaL, ALPHA_MIN, ALPHA_MAX);
@@ -558,6 +776,12 @@ GlintCount glintCountedDraws(int mode, GlintMaterial g, vec2 hpp, GlintFootprint
   vec2 dx = glintFinite(fp.duvdx / cell);
   vec2 dy = glintFinite(fp.duvdy / cell);
   o.total = glintFootprintMicrodetails(dx, dy, areaScale);
+  if (mode == GLINT_POINTS) {
+    // The uv itself where p is its unclamped quotient (finer in float than p * cell).
+    vec2 uv = p == fp.uv / cell ? fp.uv : p * cell;
+    o.count = glintPointsCount(g, uv, cell, p, dx, dy, hpp, fp.dhppdx, fp.dhppdy, areaScale, w);
+    return o;
+  }
   if (mode == GLINT_COUNTING) {
     GlintLod lod = glintLod(dx, dy);
     real level = clamp(lod.level, real(0), real(GLINT_MAX_LEVEL));
@@ -597,7 +821,7 @@ FilteredNdf glintCountedNdf(int mode, GlintMaterial g, vec2 hpp, GlintFootprint 
 
 FilteredNdf glintNdf(int mode, GlintMaterial g, vec2 hpp, GlintFootprint fp) {
 #ifdef SHIMMER_COUNTED_GLINTS
-  if (mode == GLINT_COUNTING || mode == GLINT_DB23) return glintCountedNdf(mode, g, hpp, fp);
+  if (mode == GLINT_COUNTING || mode == GLINT_DB23 || mode == GLINT_POINTS) return glintCountedNdf(mode, g, hpp, fp);
 #endif
   FilteredNdf o;
   vec2 alphaG = glintGlobalAlpha(g);
@@ -644,7 +868,8 @@ FilteredNdf glintNdf(int mode, GlintMaterial g, vec2 hpp, GlintFootprint fp) {
 // their slope density stands for: slope_density N w^2, so that every mode's
 // count is compared with the same binomial law (glints_test.cpp).
 GlintCount glintCount(int mode, GlintMaterial g, vec2 hpp, GlintFootprint fp) {
-  if (mode == GLINT_COUNTING || mode == GLINT_DB23) return glintCountedDraws(mode, g, clampSlope(hpp), fp);
+  if (mode == GLINT_COUNTING || mode == GLINT_DB23 || mode == GLINT_POINTS)
+    return glintCountedDraws(mode, g, clampSlope(hpp), fp);
   GlintCount o;
   real w = real(1.41421356237309505) * clamp(g.alphaL, ALPHA_MIN, ALPHA_MAX);
   o.binArea = w * w;
@@ -663,5 +888,7 @@ int glintModeOf(int variant) {
   if (v == VARIANT_GLINTS_SMOOTH) return GLINT_SMOOTH;
   // Selects, not branches: the kernels of the variants above fold them away
   // without a trace, so their SPIR-V (and job ids) stay as they were.
-  return v == VARIANT_GLINTS_ZK16_COUNTING ? GLINT_COUNTING : (v == VARIANT_GLINTS_DB23 ? GLINT_DB23 : GLINT_POINT);
+  return v == VARIANT_GLINTS_ZK16_COUNTING
+             ? GLINT_COUNTING
+             : (v == VARIANT_GLINTS_DB23 ? GLINT_DB23 : (v == VARIANT_GLINTS_POINTS ? GLINT_POINTS : GLINT_POINT));
 }

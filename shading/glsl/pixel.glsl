@@ -395,6 +395,8 @@ GlintFootprint pointGlintFootprint(SurfaceSample s) {
   g.duvdx = g.uv;
   g.duvdy = g.uv;
   g.areaScale = real(1);
+  g.dhppdx = g.uv;
+  g.dhppdy = g.uv;
   if (s.prim < 0) return g;
   Prim pr = loadPrim(s.prim);
   g.uv = surfaceUv(pr, s.p) * glintUvScale(pr);
@@ -608,10 +610,13 @@ PixelResult renderPixelOracle(Camera c, Light light, Material m, int variant, in
     r.s = turnedSample(r.s, fc.lobe.angle);
     r.f = turnedFootprint(r.f, fc.lobe.angle);
   }
-  if (m.ndf == NDF_GLINTS)
+  if (m.ndf == NDF_GLINTS) {
+    gf.dhppdx = r.f.dhpp_dx;
+    gf.dhppdy = r.f.dhpp_dy;
     r.ndf = glintNdfOf(variant, m, r.s, gf);
-  else
+  } else {
     r.ndf = evalVariant(variant, m.ndf, m.alpha, r.f, vp);
+  }
   r.shade = shadeSample(r.s, r.f, r.ndf, m, light, variant, vp, vec4(real(-1), real(0), real(0), real(0)));
   return r;
 }

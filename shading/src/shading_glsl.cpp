@@ -49,7 +49,8 @@ FilteredNdf variantAt(int variant, int ndf, vec2 alpha, ShadingFootprint f, Vari
 static_assert(kMeshPixelCandidates == glsl_f32::PIXEL_CANDIDATES);  // the oracle compiles the mesh code
 static_assert(int(GlintMode::kFiltered) == glsl_f32::GLINT_FILTERED && int(GlintMode::kPoint) == glsl_f32::GLINT_POINT &&
               int(GlintMode::kNaive) == glsl_f32::GLINT_NAIVE && int(GlintMode::kSmooth) == glsl_f32::GLINT_SMOOTH);
-static_assert(int(GlintMode::kCounting) == glsl_f32::GLINT_COUNTING && int(GlintMode::kDb23) == glsl_f32::GLINT_DB23);
+static_assert(int(GlintMode::kCounting) == glsl_f32::GLINT_COUNTING && int(GlintMode::kDb23) == glsl_f32::GLINT_DB23 &&
+              int(GlintMode::kPoints) == glsl_f32::GLINT_POINTS);
 static_assert(int(Ndf::kGlints) == glsl_f32::NDF_GLINTS);
 static_assert(kNormalMapFilterStride == glsl_f32::NMF_STRIDE);
 static_assert(int(LightType::kSg) == glsl_f32::LIGHT_SG && int(LightType::kSphere) == glsl_f32::LIGHT_SPHERE);
@@ -180,6 +181,8 @@ typename Glsl<T>::GlintFootprint GlslGlintFootprint(const GlintFootprint<T>& foo
   f.duvdx = footprint.duvdx;
   f.duvdy = footprint.duvdy;
   f.areaScale = footprint.area_scale;
+  f.dhppdx = footprint.dhppdx;
+  f.dhppdy = footprint.dhppdy;
   return f;
 }
 

@@ -77,8 +77,8 @@ std::optional<std::string> MaterialMismatch(const VariantInfo& info, Ndf ndf) {
     return "variant " + std::string(info.name) +
            " shades glint materials only; use a glint material such as glints:0.3,local=0.03,density=1e4";
   if (glint_material && !info.glints && info.id != 0)
-    return "a glint material takes none, supersample-N, glints-zk16, glints-zk16-counting, glints-db23, glints-naive or "
-           "glints-smooth, not " +
+    return "a glint material takes none, supersample-N, glints-zk16, glints-zk16-counting, glints-db23, glints-points, "
+           "glints-naive or glints-smooth, not " +
            std::string(info.name);
   if (info.ggx_only && ndf != Ndf::kGgx) return "variant " + std::string(info.name) + " filters GGX only; use a ggx material";
   return std::nullopt;

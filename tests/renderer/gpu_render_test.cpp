@@ -284,11 +284,19 @@ TEST(GpuRender, NormalMapFiltersNeedANormalMap) {
 // 2 % of pixels allowed), the footprint from the quad and from ray
 // differentials, and a grazing plane and a sphere.
 TEST(GpuOracle, GlintScenes) {
-  for (const char* v : {"none", "glints-zk16", "glints-naive", "glints-smooth", "glints-zk16-counting", "glints-db23"})
+  for (const char* v : {"none", "glints-zk16", "glints-naive", "glints-smooth", "glints-zk16-counting", "glints-db23",
+                        "glints-points"})
     ExpectMatchesOracle("glint-plane", v, DerivativeSource::kQuadFine);
-  for (const char* v : {"glints-zk16", "glints-zk16-counting", "glints-db23"}) {
-    ExpectMatchesOracle("glint-sphere", v, DerivativeSource::kQuadFine);
-    ExpectMatchesOracle("glint-sphere", v, DerivativeSource::kAnalytic);
+  // glints-points tests each of a pixel's few hundred points against the
+  // footprint's edges: a point within float's error of an edge (the
+  // sphere's uv from lavapipe's atan) is inside on one side and outside on
+  // the other, which moves that pixel by one microdetail's light, about
+  // 0.4 % on glint-sphere at 40 x 40 (the C++ oracle in float agrees with
+  // it in double to 1e-5 there). So its pixels are held to 1 %.
+  for (const char* v : {"glints-zk16", "glints-zk16-counting", "glints-db23", "glints-points"}) {
+    const double near_rel = std::string(v) == "glints-points" ? 1e-2 : 2e-3;
+    ExpectMatchesOracle("glint-sphere", v, DerivativeSource::kQuadFine, 1e30, "", near_rel);
+    ExpectMatchesOracle("glint-sphere", v, DerivativeSource::kAnalytic, 1e30, "", near_rel);
   }
 }
 

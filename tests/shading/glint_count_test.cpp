@@ -123,6 +123,7 @@ const char* ModeName(GlintMode mode) {
     case GlintMode::kFiltered: return "glints-zk16";
     case GlintMode::kCounting: return "glints-zk16-counting";
     case GlintMode::kDb23: return "glints-db23";
+    case GlintMode::kPoints: return "glints-points";
     default: return "other";
   }
 }
@@ -173,6 +174,46 @@ TEST(GlintCount, Db23FollowsTheBinomialLawOnItsAnisotropicGrids) {
   ExpectBinomialCounts<float>(GlintMode::kDb23);
 }
 
+// Points counted inside the footprint: each cell's count thinned by the
+// share of it the footprint covers, so the same law (at a constant half
+// vector, which these footprints have).
+TEST(GlintCount, PointsFollowTheBinomialLaw) {
+  ExpectBinomialCounts<double>(GlintMode::kPoints);
+  ExpectBinomialCounts<float>(GlintMode::kPoints);
+}
+
+// glints-points' microdetails are points lit at their own half vectors: two
+// pixels side by side count between them exactly what the footprint of both
+// counts (each point lies in one of them), with the half vector changing
+// across them, so a point keeps its light as it passes from one pixel to
+// the next instead of taking the new pixel centre's half vector. Both
+// footprints read the same level (8 cells across: level 3), so the same points.
+TEST(GlintCount, PointsSplitBetweenPixelsAtTheirOwnHalfVectors) {
+  const MaterialDesc m = Glints(0.3, 0.03, 1e4);
+  const double cell = 0.01;
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> pos(-50, 50), slope(-0.3, 0.3), change(-0.03, 0.03);
+  int lit = 0;
+  for (int i = 0; i < 400; ++i) {
+    const glm::dvec2 uv{pos(rng), pos(rng)}, h{slope(rng), slope(rng)};
+    const glm::dvec2 dhdx{change(rng), change(rng)}, dhdy{change(rng), change(rng)};
+    const glm::dvec2 dx = glm::dvec2{8, 0} * cell, dy = glm::dvec2{0, 8} * cell;
+    auto count = [&](glm::dvec2 centre, glm::dvec2 across, glm::dvec2 hpp) {
+      GlintFootprint<double> f{centre, across, dy, 1.0};
+      f.dhppdx = across == dx ? dhdx : 2.0 * dhdx;
+      f.dhppdy = dhdy;
+      return CountGlints<double>(GlintMode::kPoints, m, hpp, f);
+    };
+    const GlintCount<double> left = count(uv - 0.5 * dx, dx, h - 0.5 * dhdx);
+    const GlintCount<double> right = count(uv + 0.5 * dx, dx, h + 0.5 * dhdx);
+    const GlintCount<double> both = count(uv, 2.0 * dx, h);
+    ASSERT_NEAR(left.count + right.count, both.count, 1e-9) << "place " << i;
+    ASSERT_NEAR(left.total + right.total, both.total, 1e-9);
+    lit += both.count > 0;
+  }
+  EXPECT_GT(lit, 100);  // the check saw points, not empty footprints
+}
+
 // glints-zk16 as published (seed 001, slide 13: one draw per cell,
 // trilinear interpolation): its pixels keep the law's mean, but their
 // variance is the law's times the sum of the squared weights of the cells,
@@ -210,7 +251,7 @@ TEST(GlintCount, LargeFootprintsConvergeToTheGlobalNdf) {
   const double peak = BeckmannSlopeDensity({0, 0}, ag);
   std::mt19937 rng(17);
   std::uniform_real_distribution<double> pos(-100, 100);
-  for (GlintMode mode : {GlintMode::kFiltered, GlintMode::kCounting, GlintMode::kDb23})
+  for (GlintMode mode : {GlintMode::kFiltered, GlintMode::kCounting, GlintMode::kDb23, GlintMode::kPoints})
     for (Footprint fp : {Footprint{{40, 0}, {0, 40}}, Footprint{{28, 28}, {-3.5, 3.5}}})
       for (glm::dvec2 s : {glm::dvec2{0, 0}, glm::dvec2{0.2, 0.15}, glm::dvec2{-0.35, 0.1}, glm::dvec2{0.9, 0.0}}) {
         double sum = 0;
@@ -237,7 +278,7 @@ TEST(GlintCount, CountsAreMicrodetailsThatAppearOneAtATime) {
   const double cell = 0.01;
   std::mt19937 rng(23);
   std::uniform_real_distribution<double> pos(-20, 20), slope(-0.3, 0.3), width(0.5, 30), turn(0, kPi);
-  for (GlintMode mode : {GlintMode::kCounting, GlintMode::kDb23}) {
+  for (GlintMode mode : {GlintMode::kCounting, GlintMode::kDb23, GlintMode::kPoints}) {
     int jumps = 0;
     const int trials = 2000;
     for (int i = 0; i < trials; ++i) {

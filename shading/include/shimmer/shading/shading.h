@@ -129,19 +129,22 @@ struct MaterialDesc {
 // How a glint material is read: filtered over the footprint (glints-zk16),
 // at the finest level at the point (none, each reference sample), the naive
 // level-0 cell (glints-naive), the smooth global NDF (glints-smooth), and
-// the two that count the footprint's microdetails by the binomial law:
-// zk16's grids (glints-zk16-counting) and Deliot and Belcour's anisotropic
-// grids (glints-db23).
-enum class GlintMode { kFiltered = 0, kPoint = 1, kNaive = 2, kSmooth = 3, kCounting = 4, kDb23 = 5 };
+// the three that count the footprint's microdetails by the binomial law:
+// zk16's grids (glints-zk16-counting), Deliot and Belcour's anisotropic
+// grids (glints-db23) and point microdetails (glints-points).
+enum class GlintMode { kFiltered = 0, kPoint = 1, kNaive = 2, kSmooth = 3, kCounting = 4, kDb23 = 5, kPoints = 6 };
 
-// World-scaled texture coordinates, their change per pixel, and the surface
-// area per unit uv area (pixel.glsl).
+// World-scaled texture coordinates, their change per pixel, the surface
+// area per unit uv area (pixel.glsl), and the slope-space half vector's
+// change per pixel (read by kPoints only).
 template <class T>
 struct GlintFootprint {
   glm::vec<2, T> uv{0};
   glm::vec<2, T> duvdx{0};
   glm::vec<2, T> duvdy{0};
   T area_scale = 1;
+  glm::vec<2, T> dhppdx{0};
+  glm::vec<2, T> dhppdy{0};
 };
 
 // A glint material's (material.ndf == kGlints) slope and solid-angle density at hpp.

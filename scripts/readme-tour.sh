@@ -58,11 +58,11 @@ cp torus.png "$root/docs/images/asset-torus-lowpoly-none.png"
 cp torus-maps/tv_err.png "$root/docs/images/asset-torus-lowpoly-tv_err.png"
 # The README's glint strip (docs/glints.md): frame 0 of glint-plane under
 # orbit, the reference beside seed 001's model as published, its counted
-# form and Deliot and Belcour's anisotropic grids.
+# form, Deliot and Belcour's anisotropic grids and shimmer's point microdetails.
 glint=(--scene glint-plane --material glints:0.3,local=0.03,density=1e4 --camera orbit --frames 1 --size 128 128)
 PATH="$bin:$PATH" shimmer render "${glint[@]}" --reference-spp 8 --out glint-ref \
   --preview "$root/docs/images/glints-reference.png" >/dev/null
-for v in glints-zk16 glints-zk16-counting glints-db23; do
+for v in glints-zk16 glints-zk16-counting glints-db23 glints-points; do
   PATH="$bin:$PATH" shimmer render "${glint[@]}" --variant "$v" --out "glint-$v" --preview "$root/docs/images/$v.png" \
     >/dev/null
 done

@@ -585,7 +585,7 @@ struct GlintPointsFootprint {
   vec2 p;
   // The centre in world-scaled uv and the level-0 cell's side: a point's
   // offset from the centre is formed in uv, where float holds the position
-  // about 100 times finer than in cell units (~2000 cells on glint-sphere),
+  // about 6 times finer than in cell units (~2000 cells on glint-sphere),
   // since the half vector at the point multiplies that offset's error.
   vec2 uv;
   real cellSize;
